@@ -1,0 +1,237 @@
+//! What each `rigid` subcommand does, as library functions so tests can call them; `main`
+//! only parses arguments, prints errors and maps them to exit codes (CONTRACTS.md §3).
+
+use crate::cli::{BenchArgs, Command, RunArgs};
+use crate::error::{SceneError, StepError};
+use crate::output::{state_json, trajectory_rows, write_atomic, TRAJECTORY_HEADER};
+use crate::scene::{self, SceneDef};
+use crate::sim::{ActorState, Sim};
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The scene `rigid run` uses when given none (also `scenes/demo.ron`).
+pub const DEMO_SCENE: &str = include_str!("../scenes/demo.ron");
+
+/// Any failure of a subcommand.
+#[derive(Debug, thiserror::Error, miette::Diagnostic)]
+pub enum AppError {
+    /// Bad scene input (exit 2).
+    #[error(transparent)]
+    #[diagnostic(transparent)]
+    Scene(#[from] SceneError),
+    /// The simulation went non-finite (exit 1).
+    #[error(transparent)]
+    Step(#[from] StepError),
+    /// Writing an output file failed (exit 1).
+    #[error("{}: cannot write: {source}", .path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The thread pool could not start (exit 1).
+    #[error("cannot start {threads} worker threads: {reason}")]
+    Threads {
+        /// Threads asked for.
+        threads: u32,
+        /// Why not.
+        reason: String,
+    },
+}
+
+impl AppError {
+    /// CONTRACTS.md §3: 2 for bad input, 1 for any other failure.
+    #[must_use]
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Self::Scene(_) => 2,
+            _ => 1,
+        }
+    }
+}
+
+/// Runs a parsed command, printing to stdout.
+pub fn execute(command: Command) -> Result<(), AppError> {
+    match command {
+        Command::Run(args) => {
+            let threads = args.threads;
+            in_pool(threads, || run(&args))
+        }
+        Command::Check { scene } => check(&scene),
+        Command::Systems => {
+            for name in crate::systems::default_schedule().names() {
+                println!("{name}");
+            }
+            Ok(())
+        }
+        Command::Bench(args) => {
+            let threads = args.threads;
+            in_pool(threads, || bench(&args))
+        }
+    }
+}
+
+/// Runs `f` in a rayon pool of `threads` workers (default: all cores).
+fn in_pool(threads: Option<u32>, f: impl FnOnce() -> Result<(), AppError> + Send) -> Result<(), AppError> {
+    let n = threads.map_or_else(|| std::thread::available_parallelism().map_or(1, usize::from), |t| t as usize);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .map_err(|e| AppError::Threads { threads: n as u32, reason: e.to_string() })?;
+    pool.install(f)
+}
+
+/// Loads a scene file, or the built-in demo for `None`; returns it with the path errors name.
+pub fn load_scene(path: Option<&Path>) -> Result<(SceneDef, PathBuf), SceneError> {
+    match path {
+        Some(p) => Ok((scene::load(p)?, p.to_path_buf())),
+        None => {
+            let p = PathBuf::from("<built-in demo>");
+            Ok((scene::parse(DEMO_SCENE, &p)?, p))
+        }
+    }
+}
+
+fn run(args: &RunArgs) -> Result<(), AppError> {
+    let (mut def, path) = load_scene(args.scene.as_deref())?;
+    if let Some(dt) = args.dt {
+        def.dt = dt;
+    }
+    if let Some(names) = &args.schedule {
+        def.schedule = Some(names.clone());
+    }
+    let steps = args.steps.unwrap_or(def.steps);
+    let mut sim = crate::build::build(&def, &path)?;
+    let show = !args.quiet && std::io::stderr().is_terminal();
+    let before = sim.totals();
+    let mut trajectory = match &args.trajectory {
+        Some(p) => Some((p, trajectory_start(p, &sim)?)),
+        None => None,
+    };
+    let bar = show.then(|| progress_bar(steps));
+    let start = Instant::now();
+    let mut last_good: Option<Vec<ActorState>> = None;
+    for _ in 0..steps {
+        if args.out.is_some() {
+            last_good = Some(sim.actors());
+        }
+        if let Err(e) = sim.step() {
+            if let (Some(out), Some(state)) = (&args.out, &last_good) {
+                write_out(out, &state_json(&sim, state))?;
+            }
+            return Err(e.into());
+        }
+        if let Some((p, buf)) = &mut trajectory {
+            if sim.steps % args.every == 0 {
+                trajectory_rows(buf, sim.steps, sim.time, &sim.actors()).map_err(|e| write_error(p, e))?;
+            }
+        }
+        if let Some(bar) = &bar {
+            bar.inc(1);
+        }
+    }
+    let wall = start.elapsed();
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    if let Some((p, buf)) = trajectory {
+        let bytes = buf.into_inner().map_err(|e| write_error(p, e.into_error()))?;
+        write_out(p, &bytes)?;
+    }
+    if let Some(out) = &args.out {
+        write_out(out, &state_json(&sim, &sim.actors()))?;
+    }
+    if !args.quiet {
+        print_summary(&sim, &before, wall);
+    }
+    Ok(())
+}
+
+fn trajectory_start(path: &Path, sim: &Sim) -> Result<std::io::BufWriter<Vec<u8>>, AppError> {
+    let mut buf = std::io::BufWriter::new(Vec::new());
+    writeln!(buf, "{TRAJECTORY_HEADER}").map_err(|e| write_error(path, e))?;
+    trajectory_rows(&mut buf, 0, 0.0, &sim.actors()).map_err(|e| write_error(path, e))?;
+    Ok(buf)
+}
+
+fn write_error(path: &Path, source: std::io::Error) -> AppError {
+    AppError::Write { path: path.to_path_buf(), source }
+}
+
+fn write_out(path: &Path, bytes: impl AsRef<[u8]>) -> Result<(), AppError> {
+    write_atomic(path, bytes.as_ref()).map_err(|e| write_error(path, e))
+}
+
+fn progress_bar(steps: u64) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(steps);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {per_sec}  eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+fn print_summary(sim: &Sim, before: &crate::sim::Totals, wall: std::time::Duration) {
+    let after = sim.totals();
+    let secs = wall.as_secs_f64();
+    let rate = if secs > 0.0 { sim.steps as f64 / secs } else { f64::INFINITY };
+    println!("simulated {:.4} s in {} steps of {} s, {} actors", sim.time, sim.steps, sim.ctx.dt, sim.len());
+    println!("wall time {secs:.3} s ({rate:.0} steps/s)");
+    let [f, v, e] = sim.contacts;
+    println!("impulses: face {f}, vertex {v}, edge {e}");
+    println!("momentum drift |Δp| = {:.3e} kg·m/s", (after.linear_momentum - before.linear_momentum).length());
+    let ke0 = before.kinetic_energy;
+    let rel = if ke0 > 0.0 { format!(" ({:+.3e} relative)", (after.kinetic_energy - ke0) / ke0) } else { String::new() };
+    println!("kinetic energy {ke0} J -> {} J{rel}", after.kinetic_energy);
+}
+
+fn check(path: &Path) -> Result<(), AppError> {
+    let (def, path) = load_scene(Some(path))?;
+    let sim = crate::build::build(&def, &path)?;
+    println!("{}: ok", path.display());
+    println!("dt {} s, {} steps, gravity {:?}", def.dt, def.steps, def.gravity);
+    println!("schedule: {}", sim.schedule.names().join(", "));
+    println!("{} actors, {} distinct meshes", sim.len(), sim.ctx.meshes.len());
+    for a in sim.actors().iter().take(20) {
+        let fixed = if a.mass.is_fixed() { " (fixed)" } else { "" };
+        println!("  {}: mass {} kg at {}{fixed}", a.name, a.mass.mass, a.pose.position);
+    }
+    if sim.len() > 20 {
+        println!("  ... and {} more", sim.len() - 20);
+    }
+    Ok(())
+}
+
+fn bench(args: &BenchArgs) -> Result<(), AppError> {
+    let threads = rayon::current_num_threads();
+    let mut actors = args.actors.clone();
+    actors.sort_unstable();
+    let mut rows = Vec::new();
+    if !args.json {
+        println!("{:>8} {:>8} {:>12} {:>12} {:>14} {:>14} {:>8} {:>10}", "actors", "threads", "mean ms", "median ms", "ke start", "ke end", "escaped", "rss MiB");
+    }
+    for n in actors {
+        let r = crate::bench::run_box_gas(n, args.steps, args.warmup, args.seed, threads)?;
+        if args.json {
+            println!("{}", serde_json::to_string(&r).expect("plain data serialises"));
+        } else {
+            println!(
+                "{:>8} {:>8} {:>12.3} {:>12.3} {:>14.4} {:>14.4} {:>8} {:>10.1}",
+                r.actors, r.threads, r.mean_ms_per_step, r.median_ms_per_step, r.ke_start, r.ke_end, r.escaped, r.peak_rss_mib
+            );
+            let parts: Vec<String> = r.systems_ms.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
+            println!("         ms/step by system: {}", parts.join(", "));
+        }
+        rows.push(r);
+    }
+    if let Some(path) = &args.csv {
+        let mut csv = String::from("scene,actors,threads,steps,mean_ms_per_step,median_ms_per_step,ke_start,ke_end,escaped,peak_rss_mib\n");
+        for r in &rows {
+            csv += &format!("{},{},{},{},{},{},{},{},{},{}\n", r.scene, r.actors, r.threads, r.steps, r.mean_ms_per_step, r.median_ms_per_step, r.ke_start, r.ke_end, r.escaped, r.peak_rss_mib);
+        }
+        write_out(path, csv)?;
+    }
+    Ok(())
+}

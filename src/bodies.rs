@@ -1,0 +1,152 @@
+//! `Bodies`: the per-step snapshot of every actor's components as plain arrays (row = the
+//! actor's `ActorIndex`). Pair loops read these, never the world, so they hold no hecs borrows
+//! and are plain data that threads can share (DESIGN.md §3).
+
+use crate::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
+use crate::math::{world_inverse_inertia, Mat3, Quat, Scalar, Vector};
+use crate::mesh::MeshId;
+use hecs::{Entity, World};
+
+/// Structure of arrays, one row per actor.
+#[derive(Clone, Debug, Default)]
+pub struct Bodies {
+    /// The actor's entity in the world.
+    pub entity: Vec<Entity>,
+    /// Centre of mass [m].
+    pub position: Vec<Vector>,
+    /// Body → world rotation.
+    pub orientation: Vec<Quat>,
+    /// Linear velocity [m/s].
+    pub velocity: Vec<Vector>,
+    /// Angular velocity, world frame [rad/s].
+    pub angular_velocity: Vec<Vector>,
+    /// 1/m, 0 for fixed actors [1/kg].
+    pub inv_mass: Vec<Scalar>,
+    /// Body-frame inertia [kg·m²].
+    pub inertia_body: Vec<Mat3>,
+    /// Body-frame inverse inertia, zero for fixed actors.
+    pub inv_inertia_body: Vec<Mat3>,
+    /// World-frame inverse inertia R I⁻¹ Rᵀ at the snapshot's orientation (PHYSICS.md E9).
+    pub inv_inertia_world: Vec<Mat3>,
+    /// Bounding-sphere radius [m].
+    pub radius: Vec<Scalar>,
+    /// Mesh of each actor.
+    pub mesh: Vec<MeshId>,
+    /// Restitution.
+    pub restitution: Vec<Scalar>,
+    /// Friction coefficient.
+    pub friction: Vec<Scalar>,
+}
+
+/// The components one row is read from.
+type Row<'a> = (Entity, &'a ActorIndex, &'a Pose, &'a Velocity, &'a MassProps, &'a Material, &'a BoundingSphere, &'a Mesh);
+
+impl Bodies {
+    /// Number of rows.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+
+    /// True when there are no actors.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+
+    /// True for a fixed actor's row.
+    #[must_use]
+    pub fn is_fixed(&self, i: usize) -> bool {
+        self.inv_mass[i] == 0.0
+    }
+
+    /// Copies every actor's components into the arrays, reusing their allocations. Actor
+    /// indices must be `0..n` (the `Sim` guarantees it).
+    pub fn load(&mut self, world: &World) {
+        let n = world.query::<&ActorIndex>().iter().count();
+        self.resize(n);
+        for (entity, index, pose, vel, mass, material, sphere, mesh) in world.query::<Row>().iter() {
+            let i = index.0 as usize;
+            self.entity[i] = entity;
+            self.position[i] = pose.position;
+            self.orientation[i] = pose.orientation;
+            self.velocity[i] = vel.linear;
+            self.angular_velocity[i] = vel.angular;
+            self.inv_mass[i] = mass.inv_mass;
+            self.inertia_body[i] = mass.inertia;
+            self.inv_inertia_body[i] = mass.inv_inertia;
+            self.inv_inertia_world[i] = rotate_tensor(pose.orientation, mass.inv_inertia);
+            self.radius[i] = sphere.radius;
+            self.mesh[i] = mesh.id;
+            self.restitution[i] = material.restitution;
+            self.friction[i] = material.friction;
+        }
+    }
+
+    /// Writes poses and velocities back to the world, so world and arrays agree again.
+    pub fn store(&self, world: &mut World) {
+        for (index, pose, vel) in world.query_mut::<(&ActorIndex, &mut Pose, &mut Velocity)>() {
+            let i = index.0 as usize;
+            pose.position = self.position[i];
+            pose.orientation = self.orientation[i];
+            vel.linear = self.velocity[i];
+            vel.angular = self.angular_velocity[i];
+        }
+    }
+
+    /// The first row and field holding a NaN or infinity, if any (the NaN guard).
+    #[must_use]
+    pub fn first_non_finite(&self) -> Option<(usize, &'static str)> {
+        let vectors = [
+            ("position", &self.position),
+            ("velocity", &self.velocity),
+            ("angular_velocity", &self.angular_velocity),
+        ];
+        // Cheap pass first: a sum is finite iff every term is (a NaN or ∞ survives addition
+        // unless ∞ − ∞, which is itself NaN); the search below runs only on failure.
+        let total: Scalar = vectors.iter().flat_map(|(_, v)| v.iter()).map(|v| v.x + v.y + v.z).sum::<Scalar>()
+            + self.orientation.iter().map(|q| q.x + q.y + q.z + q.w).sum::<Scalar>();
+        if total.is_finite() {
+            return None;
+        }
+        (0..self.len()).find_map(|i| {
+            vectors
+                .iter()
+                .find(|(_, v)| !crate::math::is_finite_vector(v[i]))
+                .map(|(name, _)| (i, *name))
+                .or_else(|| (!self.orientation[i].is_finite()).then_some((i, "orientation")))
+        })
+    }
+
+    fn resize(&mut self, n: usize) {
+        self.entity.resize(n, Entity::DANGLING);
+        self.position.resize(n, Vector::ZERO);
+        self.orientation.resize(n, Quat::IDENTITY);
+        self.velocity.resize(n, Vector::ZERO);
+        self.angular_velocity.resize(n, Vector::ZERO);
+        self.inv_mass.resize(n, 0.0);
+        self.inertia_body.resize(n, Mat3::ZERO);
+        self.inv_inertia_body.resize(n, Mat3::ZERO);
+        self.inv_inertia_world.resize(n, Mat3::ZERO);
+        self.radius.resize(n, 0.0);
+        self.mesh.resize(n, MeshId(0));
+        self.restitution.resize(n, 0.0);
+        self.friction.resize(n, 0.0);
+    }
+}
+
+/// A body-frame tensor in world axes, R M Rᵀ (inertia or inverse inertia, PHYSICS.md E9),
+/// skipping the two products when M is a multiple of the identity (cubes, regular
+/// tetrahedra, spheres), where rotation cannot change it: the exact value, without the
+/// products' rounding noise, and cheaper for box-gas's 64 000 cubes.
+#[must_use]
+pub fn rotate_tensor(orientation: Quat, m: Mat3) -> Mat3 {
+    let isotropic = m.x_axis.x == m.y_axis.y
+        && m.y_axis.y == m.z_axis.z
+        && [m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.z, m.z_axis.x, m.z_axis.y].iter().all(|&x| x == 0.0);
+    if isotropic {
+        m
+    } else {
+        world_inverse_inertia(orientation, m)
+    }
+}

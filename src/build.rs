@@ -1,0 +1,114 @@
+//! Building a `Sim` from a parsed scene: listed actors, then spawners in order; each shape's
+//! mesh built, validated and shared; masses from `mass` or `density` (PHYSICS.md §3).
+
+use crate::error::SceneError;
+use crate::mesh::{ConvexMesh, MeshId};
+use crate::scene::{invalid, vector, MassSpec, SceneDef, ShapeDef};
+use crate::shapes;
+use crate::sim::{BodyDef, Sim};
+use crate::spawners::{Instance, MAX_ACTORS};
+use crate::step::Params;
+use std::collections::{HashMap, HashSet};
+use std::path::Path;
+
+/// Every actor of the scene in spawn order: listed actors, then each spawner's.
+pub fn instances(scene: &SceneDef, path: &Path) -> Result<Vec<Instance>, SceneError> {
+    let total = scene.actors.len() as u64 + scene.spawners.iter().map(crate::spawners::SpawnerDef::count).sum::<u64>();
+    if total > MAX_ACTORS {
+        return Err(invalid(path, "scene", "spawners", format!("{total} actors is more than the limit of {MAX_ACTORS}")));
+    }
+    let mut out: Vec<Instance> = scene
+        .actors
+        .iter()
+        .enumerate()
+        .map(|(i, a)| Instance::from_def(a, a.name.clone().unwrap_or_else(|| format!("actor-{i}"))))
+        .collect();
+    for (k, spawner) in scene.spawners.iter().enumerate() {
+        let who = format!("spawner {k}");
+        spawner.check().map_err(|(field, reason)| invalid(path, &who, &field, reason))?;
+        out.extend(spawner.expand(&format!("spawner{k}")));
+    }
+    let mut seen = HashSet::with_capacity(out.len());
+    if let Some(dup) = out.iter().find(|a| !seen.insert(a.name.as_str())) {
+        return Err(invalid(path, &dup.name, "name", "names must be unique; this one is used twice".into()));
+    }
+    Ok(out)
+}
+
+/// Builds the simulation a scene describes; `path` locates OBJ files and names errors.
+pub fn build(scene: &SceneDef, path: &Path) -> Result<Sim, SceneError> {
+    let schedule = match &scene.schedule {
+        Some(names) => crate::systems::schedule_of(names).map_err(|e| invalid(path, "scene", "schedule", e.to_string()))?,
+        None => crate::systems::default_schedule(),
+    };
+    let params = Params {
+        gravity: vector(scene.gravity),
+        max_sweeps: scene.solver.max_sweeps,
+        correction: scene.solver.correction,
+        slop: scene.solver.slop,
+        ..Params::default()
+    };
+    let mut sim = Sim::new(scene.dt, params, schedule);
+    spawn_all(&mut sim, &instances(scene, path)?, path)?;
+    Ok(sim)
+}
+
+/// Spawns instances into `sim`, building each distinct shape's mesh once.
+pub fn spawn_all(sim: &mut Sim, instances: &[Instance], path: &Path) -> Result<(), SceneError> {
+    let mut cache: HashMap<String, (MeshId, f64)> = HashMap::new();
+    for inst in instances {
+        let key = format!("{:?}", inst.shape);
+        let (mesh, volume) = match cache.get(&key) {
+            Some(&hit) => hit,
+            None => {
+                let mesh = mesh_of(&inst.shape, path).map_err(|(mesh, source)| SceneError::Mesh {
+                    path: path.to_path_buf(),
+                    actor: inst.name.clone(),
+                    mesh: mesh.into(),
+                    source,
+                })?;
+                let volume = mesh.volume;
+                let hit = (sim.add_mesh(mesh), volume);
+                cache.insert(key, hit);
+                hit
+            }
+        };
+        let mass = match inst.mass {
+            MassSpec::Mass(m) => m,
+            MassSpec::Density(rho) => rho * volume,
+        };
+        if !(mass.is_finite() && mass > 0.0) {
+            return Err(invalid(path, &inst.name, "mass", format!("comes out as {mass} kg; give a positive mass or density")));
+        }
+        sim.spawn(&BodyDef {
+            name: inst.name.clone(),
+            mesh,
+            mass,
+            pose: inst.pose,
+            velocity: inst.velocity,
+            material: inst.material,
+            fixed: inst.fixed,
+        });
+    }
+    Ok(())
+}
+
+/// Builds and validates the mesh of a shape; an error carries what names the mesh (the OBJ
+/// file, or the shape as written) beside what is wrong with it.
+fn mesh_of(shape: &ShapeDef, path: &Path) -> Result<ConvexMesh, (String, crate::error::MeshError)> {
+    let raw = match shape {
+        ShapeDef::Box { size } => shapes::box_raw(vector(*size)),
+        ShapeDef::Tetrahedron { edge } => shapes::tetrahedron_raw(*edge),
+        ShapeDef::Octahedron { radius } => shapes::octahedron_raw(*radius),
+        ShapeDef::Icosphere { radius, subdivisions } => shapes::icosphere_raw(*radius, *subdivisions),
+        ShapeDef::Cylinder { radius, height, segments } => shapes::cylinder_raw(*radius, *height, *segments),
+        ShapeDef::Obj { path: obj, scale } => {
+            let file = crate::scene::base_dir(path).join(obj);
+            let raw = crate::obj::load_obj(&file, *scale)
+                .map_err(|reason| (file.display().to_string(), crate::error::MeshError::Unreadable { reason }))?;
+            return ConvexMesh::new(raw.0, raw.1).map(|(m, _)| m).map_err(|e| (file.display().to_string(), e));
+        }
+    };
+    let name = format!("{shape:?}");
+    ConvexMesh::new(raw.0, raw.1).map(|(m, _)| m).map_err(|e| (name, e))
+}

@@ -1,0 +1,188 @@
+//! Kernels the detection tests share: posed meshes, point-in-mesh, closest face, segment
+//! clipping and penetration depth (PHYSICS.md §1.1, §1.5, §2.6).
+
+use crate::components::Pose;
+use crate::math::{Scalar, Vector};
+use crate::mesh::{max_distance, ConvexMesh, Plane};
+use std::sync::Arc;
+
+/// Inside tolerance relative to the body's radius: points this far outside a face still count
+/// as inside, so bodies placed exactly touching are seen (PHYSICS.md §1.1, test (g)); the
+/// approach test of §2.5 keeps touching-but-separating bodies from getting impulses.
+pub const INSIDE_TOLERANCE: Scalar = 1e-9;
+
+/// A mesh at a pose: world-space vertices and face planes, computed once per body per step.
+#[derive(Clone, Debug)]
+pub struct Posed {
+    /// The body-frame mesh (topology: triangles, edges).
+    pub mesh: Arc<ConvexMesh>,
+    /// World centre of mass [m].
+    pub position: Vector,
+    /// World vertices, in the mesh's order [m].
+    pub vertices: Vec<Vector>,
+    /// World face planes, in the mesh's order.
+    pub planes: Vec<Plane>,
+}
+
+impl Posed {
+    /// Poses `mesh` at `pose`.
+    #[must_use]
+    pub fn new(mesh: Arc<ConvexMesh>, pose: &Pose) -> Self {
+        let mut posed = Self { mesh, position: Vector::ZERO, vertices: Vec::new(), planes: Vec::new() };
+        posed.update(pose);
+        posed
+    }
+
+    /// Re-poses in place, reusing the buffers (allocation-free once sized).
+    pub fn update(&mut self, pose: &Pose) {
+        let r = crate::math::Mat3::from_quat(pose.orientation);
+        let x = pose.position;
+        self.position = x;
+        self.vertices.clear();
+        self.vertices.extend(self.mesh.vertices.iter().map(|&v| x + r * v));
+        self.planes.clear();
+        self.planes.extend(self.mesh.planes.iter().map(|p| {
+            let normal = r * p.normal;
+            Plane { normal, offset: p.offset + normal.dot(x) }
+        }));
+    }
+
+    /// The inside tolerance for this body [m].
+    #[must_use]
+    pub fn tolerance(&self) -> Scalar {
+        INSIDE_TOLERANCE * self.mesh.radius
+    }
+
+    /// Largest signed distance of `p` to a face plane and that plane's index (the closest face
+    /// of an inside point, PHYSICS.md §1.1).
+    #[must_use]
+    pub fn max_plane_distance(&self, p: Vector) -> (Scalar, usize) {
+        max_distance(self.planes.iter().map(|pl| pl.normal.dot(p) - pl.offset))
+    }
+}
+
+/// Point-in-mesh for convex `b` (PHYSICS.md §1.1, erratum E2): inside iff
+/// `max_f (p − a_f)·n_f ≤ ε`. The paper dots `p` itself with `n_f`, which can never report a
+/// point inside a closed mesh.
+///
+/// ```
+/// # use rigid_sandbox::{geometry::{is_inside, Posed}, ConvexMesh, Pose, math::Vector};
+/// # use std::sync::Arc;
+/// let cube = Posed::new(Arc::new(ConvexMesh::cuboid(Vector::ONE)), &Pose::IDENTITY);
+/// assert!(is_inside(&cube, Vector::new(0.5, 0.0, 0.0)));   // on a face: touching counts
+/// assert!(!is_inside(&cube, Vector::new(0.625, 0.0, 0.0)));
+/// ```
+#[must_use]
+pub fn is_inside(b: &Posed, p: Vector) -> bool {
+    let eps = b.tolerance();
+    b.planes.iter().all(|pl| pl.normal.dot(p) - pl.offset <= eps)
+}
+
+/// Where a segment meets a convex body (PHYSICS.md §1.5, Cyrus–Beck form).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clip {
+    /// Segment parameter where it enters [0, 1].
+    pub t_in: Scalar,
+    /// Where it leaves.
+    pub t_out: Scalar,
+    /// Plane it enters through, if it starts outside.
+    pub plane_in: Option<usize>,
+    /// Plane it leaves through, if it ends outside.
+    pub plane_out: Option<usize>,
+}
+
+/// Clips segment `v0 → v1` against the planes of `b`, each pushed out by `eps`; `None` when it
+/// misses. Equivalent to the paper's sort-and-test-midpoints procedure for convex `b`, in
+/// O(F_B) instead of O(F_B²):
+///
+/// ```text
+/// t_in = 0, t_out = 1
+/// for each plane: d0, d1 = signed distances of v0, v1
+///     both > 0: miss;  d0 > 0 ≥ d1: entering at d0/(d0−d1);  d0 ≤ 0 < d1: leaving there
+/// hit ⇔ t_in < t_out
+/// ```
+#[must_use]
+pub fn clip_segment(b: &Posed, v0: Vector, v1: Vector, eps: Scalar) -> Option<Clip> {
+    let mut clip = Clip { t_in: 0.0, t_out: 1.0, plane_in: None, plane_out: None };
+    for (f, pl) in b.planes.iter().enumerate() {
+        let d0 = pl.normal.dot(v0) - pl.offset - eps;
+        let d1 = pl.normal.dot(v1) - pl.offset - eps;
+        if d0 > 0.0 && d1 > 0.0 {
+            return None;
+        }
+        if d0 > 0.0 && d1 <= 0.0 {
+            let t = d0 / (d0 - d1);
+            if t > clip.t_in {
+                clip.t_in = t;
+                clip.plane_in = Some(f);
+            }
+        } else if d0 <= 0.0 && d1 > 0.0 {
+            let t = d0 / (d0 - d1);
+            if t < clip.t_out {
+                clip.t_out = t;
+                clip.plane_out = Some(f);
+            }
+        }
+        if clip.t_in >= clip.t_out {
+            return None;
+        }
+    }
+    Some(clip)
+}
+
+/// Overlap of the two bodies' projections on `n` (from B to A), PHYSICS.md §2.6:
+/// `max_b b·n − min_a a·n`, clamped at 0. Moving A by this along `n` separates them.
+#[must_use]
+pub fn depth_along(a: &Posed, b: &Posed, n: Vector) -> Scalar {
+    let max_b = b.vertices.iter().map(|v| v.dot(n)).fold(Scalar::NEG_INFINITY, Scalar::max);
+    let min_a = a.vertices.iter().map(|v| v.dot(n)).fold(Scalar::INFINITY, Scalar::min);
+    (max_b - min_a).max(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::from_euler_degrees;
+
+    fn cube_at(x: Vector, degrees: Vector) -> Posed {
+        let pose = Pose { position: x, orientation: from_euler_degrees(degrees) };
+        Posed::new(Arc::new(ConvexMesh::cuboid(Vector::ONE)), &pose)
+    }
+
+    #[test]
+    fn point_in_mesh_matches_t_pim() {
+        // PHYSICS.md §4 T-PIM: centre inside, (0.6,0,0) outside, (0.5,0,0) on the face inside.
+        let cube = cube_at(Vector::ZERO, Vector::ZERO);
+        assert!(is_inside(&cube, Vector::ZERO));
+        assert!(!is_inside(&cube, Vector::new(0.6, 0.0, 0.0)));
+        assert!(is_inside(&cube, Vector::new(0.5, 0.0, 0.0)));
+        // The paper's literal test p·n_f < 0 fails for the centre: every p·n_f is 0 (E2).
+        assert!(cube.planes.iter().all(|pl| Vector::ZERO.dot(pl.normal) >= 0.0));
+    }
+
+    #[test]
+    fn clip_matches_t_edge() {
+        // T-edge: segment (0,0,−2) → (0,0,2) through the unit cube: t_in 0.375, t_out 0.625.
+        let cube = cube_at(Vector::ZERO, Vector::ZERO);
+        let c = clip_segment(&cube, Vector::new(0.0, 0.0, -2.0), Vector::new(0.0, 0.0, 2.0), 0.0).expect("crosses");
+        assert_eq!((c.t_in, c.t_out), (0.375, 0.625));
+        assert!(clip_segment(&cube, Vector::new(1.0, 0.0, -2.0), Vector::new(1.0, 0.0, 2.0), 0.0).is_none());
+    }
+
+    #[test]
+    fn clip_of_crossing_ridges_matches_t_edge() {
+        // T-edge (f2 geometry): A = cube Rz(45°) at y = √2 − 0.01, its lowest edge along z;
+        // B = cube Rx(45°) at the origin with its ridge along x at y = √2/2.
+        let b = cube_at(Vector::ZERO, Vector::new(45.0, 0.0, 0.0));
+        let y = 2f64.sqrt() / 2.0 - 0.01;
+        let c = clip_segment(&b, Vector::new(0.0, y, -0.5), Vector::new(0.0, y, 0.5), 0.0).expect("crosses");
+        assert!((c.t_in - 0.49).abs() < 1e-12 && (c.t_out - 0.51).abs() < 1e-12, "{c:?}");
+    }
+
+    #[test]
+    fn depth_of_overlapping_cubes_is_the_overlap() {
+        let a = cube_at(Vector::new(-0.99, 0.0, 0.0), Vector::ZERO);
+        let b = cube_at(Vector::ZERO, Vector::ZERO);
+        assert!((depth_along(&a, &b, -Vector::X) - 0.01).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,98 @@
+//! Exact volume, centre of mass and inertia of a closed triangle mesh (PHYSICS.md §3).
+//!
+//! The paper puts the mass at the vertices and the centre of mass at their average (errata E7,
+//! E8): both depend on the tessellation and are wrong for a solid. Here every outward triangle
+//! and a reference point form a signed tetrahedron, and the sums are exact integrals.
+
+use crate::math::{Mat3, Scalar, Vector};
+
+/// Volume integrals of a closed mesh at unit density [m³, m, kg·m² per kg/m³].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeProps {
+    /// Signed volume [m³]: negative when the mesh is wound inside out (§3.3 step 3).
+    pub volume: Scalar,
+    /// Centroid (centre of mass at uniform density) in the mesh's own coordinates [m].
+    pub centroid: Vector,
+    /// Inertia tensor about the centroid at density 1 [kg·m²/(kg/m³)]; scale by ρ = m / V.
+    pub inertia: Mat3,
+}
+
+/// Integrates a closed triangle mesh (PHYSICS.md §3.1, Mirtich/Eberly/Tonon).
+///
+/// With `a, b, c` relative to the reference `o` (the vertex average, to limit cancellation):
+/// `D = a·(b×c)`, `V = ΣD/6`, `g = o + ΣD(a+b+c)/(4ΣD)`,
+/// `C = (1/120) ΣD (aaᵀ + bbᵀ + ccᵀ + ssᵀ)`, `I_o = tr(C)E − C`, then the parallel-axis shift.
+/// Triangles must index into `vertices` (the caller validates).
+#[must_use]
+pub fn volume_props(vertices: &[Vector], triangles: &[[u32; 3]]) -> VolumeProps {
+    let o = vertices.iter().copied().sum::<Vector>() / vertices.len().max(1) as Scalar;
+    let mut sum_d = 0.0;
+    let mut sum_ds = Vector::ZERO;
+    let mut c = Mat3::ZERO;
+    for t in triangles {
+        let [a, b, cc] = t.map(|i| vertices[i as usize] - o);
+        let d = a.dot(b.cross(cc));
+        let s = a + b + cc;
+        sum_d += d;
+        sum_ds += d * s;
+        c += d * (outer(a, a) + outer(b, b) + outer(cc, cc) + outer(s, s));
+    }
+    let volume = sum_d / 6.0;
+    if sum_d == 0.0 {
+        return VolumeProps { volume, centroid: o, inertia: Mat3::ZERO };
+    }
+    let offset = sum_ds / (4.0 * sum_d);
+    let c = c * (1.0 / 120.0);
+    let trace = c.x_axis.x + c.y_axis.y + c.z_axis.z;
+    let inertia_o = Mat3::from_diagonal(Vector::splat(trace)) - c;
+    // Parallel-axis shift from o to the centroid, with m = V at unit density.
+    let shift = volume * (Mat3::from_diagonal(Vector::splat(offset.length_squared())) - outer(offset, offset));
+    VolumeProps { volume, centroid: o + offset, inertia: inertia_o - shift }
+}
+
+/// The outer product a bᵀ.
+#[must_use]
+pub fn outer(a: Vector, b: Vector) -> Mat3 {
+    Mat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: Mat3, b: Mat3, tol: Scalar) -> bool {
+        (a - b).to_cols_array().iter().all(|x| x.abs() <= tol)
+    }
+
+    #[test]
+    fn corner_tetrahedron_has_the_exact_products_of_inertia() {
+        // PHYSICS.md §3.2: V = 1/6, g = 1/4, diagonal 1/80, off-diagonals +1/480 (ρ = 1).
+        let v = [Vector::ZERO, Vector::X, Vector::Y, Vector::Z];
+        let t = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let p = volume_props(&v, &t);
+        assert!((p.volume - 1.0 / 6.0).abs() < 1e-15);
+        assert!((p.centroid - Vector::splat(0.25)).length() < 1e-15);
+        let d = 1.0 / 80.0;
+        let o = 1.0 / 480.0;
+        let want = Mat3::from_cols(Vector::new(d, o, o), Vector::new(o, d, o), Vector::new(o, o, d));
+        assert!(close(p.inertia, want, 1e-15), "{:?}", p.inertia);
+    }
+
+    #[test]
+    fn unit_cube_with_split_top_keeps_its_centroid() {
+        // E7: nine vertices (extra one in the top face centre); the vertex average is at z = 5/9.
+        let mut v: Vec<Vector> = (0..8)
+            .map(|k| Vector::new((k >> 2 & 1) as f64, (k >> 1 & 1) as f64, (k & 1) as f64))
+            .collect();
+        v.push(Vector::new(0.5, 0.5, 1.0)); // 8: top (z = 1) centre
+        // Canonical cube triangles (PHYSICS.md §0) with the +z face replaced by a fan of four.
+        let t = [
+            [4, 6, 7], [4, 7, 5], [0, 1, 3], [0, 3, 2], [2, 3, 7], [2, 7, 6], [0, 4, 5], [0, 5, 1],
+            [1, 5, 8], [5, 7, 8], [7, 3, 8], [3, 1, 8], [0, 2, 6], [0, 6, 4],
+        ];
+        let p = volume_props(&v, &t);
+        assert!((p.volume - 1.0).abs() < 1e-14);
+        assert!((p.centroid - Vector::splat(0.5)).length() < 1e-14, "{:?}", p.centroid);
+        assert!(close(p.inertia, Mat3::from_diagonal(Vector::splat(1.0 / 6.0)), 1e-14));
+    }
+}

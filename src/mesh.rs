@@ -1,0 +1,332 @@
+//! Convex meshes: validated once when built, then shared read-only by every actor using them.
+//!
+//! A `ConvexMesh` stores its vertices in the body frame **about its exact centre of mass**
+//! (PHYSICS.md §0, §3), outward (counter-clockwise) triangles, deduplicated edges for the edge
+//! test, and the distinct face planes that point-in-mesh and clipping need (coplanar triangles,
+//! such as a box face's two halves, share one plane: same answers, half the work).
+
+use crate::error::MeshError;
+use crate::mass::{volume_props, VolumeProps};
+use crate::math::{Mat3, Scalar, Vector};
+use std::collections::{HashMap, VecDeque};
+
+/// Slack for convexity [fraction of the mesh size]: a vertex may stand this far in front of a
+/// face plane. OBJ files print about 6 significant digits, so exact coplanarity cannot be asked.
+pub const CONVEX_TOLERANCE: Scalar = 1e-6;
+/// Two triangles share one plane when their normals and offsets agree to this (relative); a
+/// looser merge would change answers, a stricter one only costs a duplicate plane.
+pub const PLANE_MERGE_TOLERANCE: Scalar = 1e-10;
+/// Smallest accepted volume, relative to the cube of the mesh size: flatter is degenerate.
+pub const MIN_RELATIVE_VOLUME: Scalar = 1e-9;
+
+/// A face plane in the body frame: signed distance `s(p) = normal·p − offset` (negative inside).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    /// Outward unit normal.
+    pub normal: Vector,
+    /// `normal · a` for any point `a` on the face [m].
+    pub offset: Scalar,
+}
+
+/// Index of a mesh in the [`MeshTable`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct MeshId(pub u32);
+
+/// A closed, convex, outward-wound triangle mesh about its centre of mass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConvexMesh {
+    /// Vertices in the body frame, relative to the centre of mass [m].
+    pub vertices: Vec<Vector>,
+    /// Triangles, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// Each undirected edge once, `(i, j)` with `i < j`, in sorted order (PHYSICS.md §1.5).
+    pub edges: Vec<[u32; 2]>,
+    /// Distinct face planes, in order of first triangle.
+    pub planes: Vec<Plane>,
+    /// Bounding-sphere radius about the centre of mass, `max |p|` [m] (PHYSICS.md §1.2).
+    pub radius: Scalar,
+    /// Smallest width over the face normals [m]: the thickness that bounds safe speeds (§5).
+    pub thickness: Scalar,
+    /// Volume [m³].
+    pub volume: Scalar,
+    /// Inertia about the centre of mass at density 1 [kg·m² per kg/m³].
+    pub unit_inertia: Mat3,
+}
+
+impl ConvexMesh {
+    /// Validates and builds a mesh from raw vertices and triangles (PHYSICS.md §3.3): closed,
+    /// consistently wound (mixed windings repaired by a breadth-first walk, an inside-out mesh
+    /// flipped), non-degenerate and convex. Returns the mesh and the centroid of the input
+    /// coordinates, which the vertices were shifted by.
+    pub fn new(vertices: Vec<Vector>, triangles: Vec<[u32; 3]>) -> Result<(Self, Vector), MeshError> {
+        check_input(&vertices, &triangles)?;
+        let mut triangles = triangles;
+        orient_consistently(&mut triangles)?;
+        let mut props = volume_props(&vertices, &triangles);
+        let size = extent(&vertices);
+        if props.volume.abs() <= MIN_RELATIVE_VOLUME * size.powi(3) || !props.volume.is_finite() {
+            return Err(MeshError::Degenerate { volume: props.volume });
+        }
+        if props.volume < 0.0 {
+            // Inside out (§3.3 step 3): flip every triangle; the centroid is unchanged.
+            for t in &mut triangles {
+                t.swap(1, 2);
+            }
+            props = VolumeProps { volume: -props.volume, inertia: -props.inertia, ..props };
+        }
+        let vertices: Vec<Vector> = vertices.iter().map(|&v| v - props.centroid).collect();
+        let planes = face_planes(&vertices, &triangles, size);
+        check_convex(&vertices, &planes, size)?;
+        let radius = vertices.iter().map(|v| v.length()).fold(0.0, Scalar::max);
+        let thickness = planes
+            .iter()
+            .map(|p| vertices.iter().map(|&v| p.offset - p.normal.dot(v)).fold(0.0, Scalar::max))
+            .fold(Scalar::INFINITY, Scalar::min);
+        let edges = unique_edges(&triangles);
+        let mesh = Self {
+            vertices,
+            triangles,
+            edges,
+            planes,
+            radius,
+            thickness,
+            volume: props.volume,
+            unit_inertia: props.inertia,
+        };
+        Ok((mesh, props.centroid))
+    }
+
+    /// The canonical box of PHYSICS.md §0 with these full edge lengths [m].
+    ///
+    /// # Panics
+    /// If a size is not positive and finite: callers pass checked or literal sizes.
+    #[must_use]
+    pub fn cuboid(size: Vector) -> Self {
+        let (v, t) = crate::shapes::box_raw(size);
+        Self::new(v, t).expect("a box with positive sizes is a valid convex mesh").0
+    }
+
+    /// Signed distance of body-frame point `p` to each plane, maximum and its plane index:
+    /// `p` is inside iff the maximum is ≤ the inside tolerance (PHYSICS.md §1.1).
+    #[must_use]
+    pub fn max_plane_distance(&self, p: Vector) -> (Scalar, usize) {
+        max_distance(self.planes.iter().map(|pl| pl.normal.dot(p) - pl.offset))
+    }
+}
+
+/// The largest of a sequence of signed distances and its index; ties keep the lowest index,
+/// so the closest face of a point exactly on an edge is deterministic (PHYSICS.md §1.1).
+#[must_use]
+pub fn max_distance(distances: impl Iterator<Item = Scalar>) -> (Scalar, usize) {
+    let mut best = (Scalar::NEG_INFINITY, 0);
+    for (i, s) in distances.enumerate() {
+        if s > best.0 {
+            best = (s, i);
+        }
+    }
+    best
+}
+
+/// Every mesh of a simulation, once: box-gas's 64 000 cubes share one.
+#[derive(Clone, Debug, Default)]
+pub struct MeshTable {
+    meshes: Vec<std::sync::Arc<ConvexMesh>>,
+}
+
+impl MeshTable {
+    /// Adds a mesh, reusing an identical one already present.
+    pub fn insert(&mut self, mesh: ConvexMesh) -> MeshId {
+        if let Some(i) = self.meshes.iter().position(|m| **m == mesh) {
+            return MeshId(i as u32);
+        }
+        self.meshes.push(std::sync::Arc::new(mesh));
+        MeshId((self.meshes.len() - 1) as u32)
+    }
+
+    /// The mesh with this id (ids come only from `insert`, so it exists).
+    #[must_use]
+    pub fn get(&self, id: MeshId) -> &ConvexMesh {
+        &self.meshes[id.0 as usize]
+    }
+
+    /// The shared handle of a mesh, for caches that outlive a borrow of the table.
+    #[must_use]
+    pub fn get_arc(&self, id: MeshId) -> std::sync::Arc<ConvexMesh> {
+        std::sync::Arc::clone(&self.meshes[id.0 as usize])
+    }
+
+    /// Number of distinct meshes.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.meshes.len()
+    }
+
+    /// True when no mesh was added.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.meshes.is_empty()
+    }
+}
+
+fn extent(vertices: &[Vector]) -> Scalar {
+    let (lo, hi) = vertices.iter().fold((Vector::splat(Scalar::INFINITY), Vector::splat(Scalar::NEG_INFINITY)), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    (hi - lo).max_element()
+}
+
+fn check_input(vertices: &[Vector], triangles: &[[u32; 3]]) -> Result<(), MeshError> {
+    if vertices.len() < 4 || triangles.len() < 4 {
+        return Err(MeshError::Empty { vertices: vertices.len(), triangles: triangles.len() });
+    }
+    if let Some(i) = vertices.iter().position(|v| !crate::math::is_finite_vector(*v)) {
+        return Err(MeshError::NonFinite { vertex: i });
+    }
+    for (i, t) in triangles.iter().enumerate() {
+        if t.iter().any(|&k| k as usize >= vertices.len()) {
+            return Err(MeshError::BadIndex { triangle: i, vertices: vertices.len() });
+        }
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            return Err(MeshError::RepeatedIndex { triangle: i });
+        }
+    }
+    Ok(())
+}
+
+/// Each undirected edge must be used by exactly two triangles (closed manifold, §3.3 step 1);
+/// then a breadth-first walk from triangle 0 flips neighbours wound against it (step 2).
+fn orient_consistently(triangles: &mut [[u32; 3]]) -> Result<(), MeshError> {
+    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (i, t) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            by_edge.entry((a.min(b), a.max(b))).or_default().push(i);
+        }
+    }
+    if let Some((&(a, b), users)) = by_edge.iter().filter(|(_, u)| u.len() != 2).min_by_key(|(e, _)| **e) {
+        return Err(MeshError::Open { a, b, triangles: users.len() });
+    }
+    let mut seen = vec![false; triangles.len()];
+    let mut queue = VecDeque::from([0]);
+    seen[0] = true;
+    while let Some(i) = queue.pop_front() {
+        let t = triangles[i];
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let users = &by_edge[&(a.min(b), a.max(b))];
+            let j = if users[0] == i { users[1] } else { users[0] };
+            if seen[j] {
+                continue;
+            }
+            // A consistent neighbour walks the shared edge b→a; a→b means it is flipped.
+            if directed(&triangles[j], a, b) {
+                triangles[j].swap(1, 2);
+            }
+            seen[j] = true;
+            queue.push_back(j);
+        }
+    }
+    if let Some(i) = seen.iter().position(|s| !s) {
+        return Err(MeshError::Disconnected { triangle: i });
+    }
+    Ok(())
+}
+
+fn directed(t: &[u32; 3], a: u32, b: u32) -> bool {
+    (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b)
+}
+
+fn face_planes(vertices: &[Vector], triangles: &[[u32; 3]], size: Scalar) -> Vec<Plane> {
+    let mut planes: Vec<Plane> = Vec::new();
+    for t in triangles {
+        let [a, b, c] = t.map(|i| vertices[i as usize]);
+        // Zero-area triangles carry no direction (§3.3 step 5).
+        let Some(normal) = (b - a).cross(c - a).try_normalize() else { continue };
+        let plane = Plane { normal, offset: normal.dot(a) };
+        let same = |p: &Plane| {
+            (p.normal - normal).length() <= PLANE_MERGE_TOLERANCE
+                && (p.offset - plane.offset).abs() <= PLANE_MERGE_TOLERANCE * size
+        };
+        if !planes.iter().any(same) {
+            planes.push(plane);
+        }
+    }
+    planes
+}
+
+fn check_convex(vertices: &[Vector], planes: &[Plane], size: Scalar) -> Result<(), MeshError> {
+    for (f, p) in planes.iter().enumerate() {
+        for (i, &v) in vertices.iter().enumerate() {
+            let s = p.normal.dot(v) - p.offset;
+            if s > CONVEX_TOLERANCE * size {
+                return Err(MeshError::NonConvex { vertex: i, face: f, distance: s });
+            }
+        }
+    }
+    Ok(())
+}
+
+fn unique_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    let mut edges: Vec<[u32; 2]> = triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| [t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])]))
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::box_raw;
+
+    #[test]
+    fn box_has_eight_vertices_eighteen_edges_six_planes() {
+        let (v, t) = box_raw(Vector::ONE);
+        let (m, c) = ConvexMesh::new(v, t).expect("valid box");
+        assert_eq!((m.vertices.len(), m.triangles.len(), m.edges.len(), m.planes.len()), (8, 12, 18, 6));
+        assert_eq!(c, Vector::ZERO);
+        assert!((m.radius - 3f64.sqrt() / 2.0).abs() < 1e-15);
+        assert!((m.thickness - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn reversed_winding_is_repaired_with_the_same_properties() {
+        // T-winding: every triangle reversed gives V < 0, which is detected and flipped.
+        let (v, t) = box_raw(Vector::new(1.0, 2.0, 3.0));
+        let reversed = t.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        let (good, _) = ConvexMesh::new(v.clone(), t).expect("valid");
+        let (fixed, _) = ConvexMesh::new(v, reversed).expect("repaired");
+        assert_eq!(good.volume, fixed.volume);
+        assert!((good.unit_inertia - fixed.unit_inertia).to_cols_array().iter().all(|x| x.abs() < 1e-14));
+        assert_eq!(good.planes.len(), fixed.planes.len());
+        assert!(good.planes.iter().zip(&fixed.planes).all(|(a, b)| (a.normal - b.normal).length() < 1e-15));
+    }
+
+    #[test]
+    fn one_flipped_triangle_is_repaired() {
+        let (v, mut t) = box_raw(Vector::ONE);
+        t[5].swap(0, 1);
+        let (m, _) = ConvexMesh::new(v, t).expect("repaired");
+        assert!((m.volume - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn open_box_is_rejected() {
+        let (v, mut t) = box_raw(Vector::ONE);
+        t.pop();
+        assert!(matches!(ConvexMesh::new(v, t), Err(MeshError::Open { .. })));
+    }
+
+    #[test]
+    fn dented_box_is_rejected_as_non_convex() {
+        let (mut v, t) = box_raw(Vector::ONE);
+        v[7] = Vector::splat(0.1); // pull a corner inside
+        assert!(matches!(ConvexMesh::new(v, t), Err(MeshError::NonConvex { .. })));
+    }
+
+    #[test]
+    fn flat_box_is_degenerate() {
+        let (v, t) = box_raw(Vector::new(1.0, 0.0, 1.0));
+        assert!(matches!(ConvexMesh::new(v, t), Err(MeshError::Degenerate { .. })));
+    }
+}

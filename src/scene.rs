@@ -1,0 +1,373 @@
+//! Scene files (CONTRACTS.md §2): the RON schema, parsing with positions in errors, checks
+//! of every value, and building a `Sim`. Degrees become radians here, once.
+
+use crate::error::SceneError;
+use crate::math::{Scalar, Vector};
+use crate::spawners::SpawnerDef;
+use miette::NamedSource;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// Largest scene file read [bytes]: bounds memory and time on hostile input.
+pub const MAX_SCENE_BYTES: u64 = 16 << 20;
+/// Deepest nesting the parser follows before giving up with an error.
+pub const MAX_NESTING: usize = 64;
+
+/// A 3-vector as written in a scene: `(x, y, z)`.
+pub type V3 = (Scalar, Scalar, Scalar);
+
+/// Converts a scene triple to a vector.
+#[must_use]
+pub fn vector((x, y, z): V3) -> Vector {
+    Vector::new(x, y, z)
+}
+
+/// A whole scene file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Scene")]
+pub struct SceneDef {
+    /// Seconds per step (default 1/60).
+    #[serde(default = "default_dt")]
+    pub dt: Scalar,
+    /// Steps for `rigid run` (default 600).
+    #[serde(default = "default_steps")]
+    pub steps: u64,
+    /// Gravity [m/s²] (default (0, −9.81, 0)).
+    #[serde(default = "default_gravity")]
+    pub gravity: V3,
+    /// The listed actors.
+    pub actors: Vec<ActorDef>,
+    /// Generators of many actors, spawned after `actors` in order.
+    #[serde(default)]
+    pub spawners: Vec<SpawnerDef>,
+    /// System names in run order (default: the default schedule).
+    #[serde(default)]
+    pub schedule: Option<Vec<String>>,
+    /// Contact-solver settings.
+    #[serde(default)]
+    pub solver: SolverDef,
+}
+
+fn default_dt() -> Scalar {
+    1.0 / 60.0
+}
+fn default_steps() -> u64 {
+    600
+}
+fn default_gravity() -> V3 {
+    (0.0, -9.81, 0.0)
+}
+
+/// Settings of `resolve` and `correct` (PHYSICS.md §2.5–2.6); defaults in `Params`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, rename = "Solver", default)]
+pub struct SolverDef {
+    /// Most impulse sweeps per step (1..=1000, default 20).
+    pub max_sweeps: u32,
+    /// Fraction of penetration removed per step, 0..=1 (default 0.4).
+    pub correction: Scalar,
+    /// Penetration left alone, fraction of the thinner body, 0..=1 (default 0.005).
+    pub slop: Scalar,
+}
+
+impl Default for SolverDef {
+    fn default() -> Self {
+        let p = crate::step::Params::default();
+        Self { max_sweeps: p.max_sweeps, correction: p.correction, slop: p.slop }
+    }
+}
+
+/// A shape (CONTRACTS.md §2); every one becomes a closed convex mesh.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum ShapeDef {
+    /// Box with these full edge lengths [m].
+    Box {
+        /// (x, y, z) sizes.
+        size: V3,
+    },
+    /// Regular tetrahedron.
+    Tetrahedron {
+        /// Edge length [m].
+        edge: Scalar,
+    },
+    /// Regular octahedron.
+    Octahedron {
+        /// Distance of the vertices from the centre [m].
+        radius: Scalar,
+    },
+    /// Subdivided icosahedron.
+    Icosphere {
+        /// Radius [m].
+        radius: Scalar,
+        /// Subdivisions, 0..=5.
+        subdivisions: u32,
+    },
+    /// Prism about y approximating a cylinder.
+    Cylinder {
+        /// Radius [m].
+        radius: Scalar,
+        /// Height [m].
+        height: Scalar,
+        /// Sides, 3..=256.
+        segments: u32,
+    },
+    /// Wavefront OBJ file, path relative to the scene file.
+    Obj {
+        /// The file.
+        path: String,
+        /// Uniform scale (default 1).
+        #[serde(default = "one")]
+        scale: Scalar,
+    },
+}
+
+fn one() -> Scalar {
+    1.0
+}
+
+impl ShapeDef {
+    /// Checks sizes and counts; `Err((field, reason))`.
+    fn check(&self) -> Result<(), (String, String)> {
+        let positive = |field: &str, v: Scalar| {
+            if v.is_finite() && v > 0.0 { Ok(()) } else { Err((format!("shape.{field}"), format!("must be a finite number > 0 m, got {v}"))) }
+        };
+        match self {
+            Self::Box { size: (x, y, z) } => [("size.x", *x), ("size.y", *y), ("size.z", *z)].iter().try_for_each(|(f, v)| positive(f, *v)),
+            Self::Tetrahedron { edge } => positive("edge", *edge),
+            Self::Octahedron { radius } => positive("radius", *radius),
+            Self::Icosphere { radius, subdivisions } => {
+                positive("radius", *radius)?;
+                if *subdivisions > crate::shapes::MAX_SUBDIVISIONS {
+                    return Err(("shape.subdivisions".into(), format!("must be 0..={}, got {subdivisions}", crate::shapes::MAX_SUBDIVISIONS)));
+                }
+                Ok(())
+            }
+            Self::Cylinder { radius, height, segments } => {
+                positive("radius", *radius)?;
+                positive("height", *height)?;
+                if !crate::shapes::SEGMENTS_RANGE.contains(segments) {
+                    let r = crate::shapes::SEGMENTS_RANGE;
+                    return Err(("shape.segments".into(), format!("must be {}..={}, got {segments}", r.start(), r.end())));
+                }
+                Ok(())
+            }
+            Self::Obj { path, scale } => {
+                if path.is_empty() {
+                    return Err(("shape.path".into(), "must name an OBJ file".into()));
+                }
+                positive("scale", *scale)
+            }
+        }
+    }
+}
+
+/// An actor as written, every field optional but `shape` (checked into `ActorDef`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Actor")]
+struct RawActor {
+    #[serde(default)]
+    name: Option<String>,
+    shape: ShapeDef,
+    #[serde(default)]
+    mass: Option<Scalar>,
+    #[serde(default)]
+    density: Option<Scalar>,
+    #[serde(default)]
+    position: Option<V3>,
+    #[serde(default)]
+    rotation: Option<V3>,
+    #[serde(default)]
+    velocity: Option<V3>,
+    #[serde(default)]
+    angular_velocity: Option<V3>,
+    #[serde(default)]
+    restitution: Option<Scalar>,
+    #[serde(default)]
+    friction: Option<Scalar>,
+    #[serde(default)]
+    fixed: Option<bool>,
+}
+
+/// How an actor's mass is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MassSpec {
+    /// Total mass [kg].
+    Mass(Scalar),
+    /// Density [kg/m³].
+    Density(Scalar),
+}
+
+/// A checked actor definition. Defaults: name `actor-<index>`, density 1, origin, no
+/// rotation, at rest, restitution 0.5, friction 0, not fixed.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(try_from = "RawActor")]
+pub struct ActorDef {
+    /// Name, if given.
+    pub name: Option<String>,
+    /// Shape.
+    pub shape: ShapeDef,
+    /// Mass or density.
+    pub mass: MassSpec,
+    /// Centre of mass [m].
+    pub position: Vector,
+    /// Euler angles [degrees], R = Rz·Ry·Rx.
+    pub rotation: Vector,
+    /// [m/s].
+    pub velocity: Vector,
+    /// [rad/s], world frame.
+    pub angular_velocity: Vector,
+    /// 0..=1.
+    pub restitution: Scalar,
+    /// ≥ 0.
+    pub friction: Scalar,
+    /// Never moves.
+    pub fixed: bool,
+}
+
+/// Default restitution (CONTRACTS.md §2).
+pub const DEFAULT_RESTITUTION: Scalar = 0.5;
+
+impl TryFrom<RawActor> for ActorDef {
+    type Error = String;
+
+    fn try_from(raw: RawActor) -> Result<Self, String> {
+        let who = raw.name.as_deref().map_or_else(|| "actor".to_string(), |n| format!("actor '{n}'"));
+        let fail = |(field, reason): (String, String)| format!("{who}: {field}: {reason}");
+        raw.shape.check().map_err(fail)?;
+        let mass = match (raw.mass, raw.density) {
+            (Some(_), Some(_)) => return Err(fail(("mass".into(), "give `mass` or `density`, not both".into()))),
+            (Some(m), None) => MassSpec::Mass(positive("mass", m, "kg").map_err(fail)?),
+            (None, Some(d)) => MassSpec::Density(positive("density", d, "kg/m^3").map_err(fail)?),
+            (None, None) => MassSpec::Density(1.0),
+        };
+        let v3 = |field: &str, v: Option<V3>| -> Result<Vector, String> {
+            let v = vector(v.unwrap_or_default());
+            if crate::math::is_finite_vector(v) { Ok(v) } else { Err(fail((field.into(), format!("must be finite, got {v}")))) }
+        };
+        let restitution = raw.restitution.unwrap_or(DEFAULT_RESTITUTION);
+        if !(0.0..=1.0).contains(&restitution) {
+            return Err(fail(("restitution".into(), format!("must be in 0..=1, got {restitution}"))));
+        }
+        let friction = raw.friction.unwrap_or(0.0);
+        if !(friction.is_finite() && friction >= 0.0) {
+            return Err(fail(("friction".into(), format!("must be a finite number >= 0, got {friction}"))));
+        }
+        if raw.name.as_deref() == Some("") {
+            return Err(fail(("name".into(), "must not be empty".into())));
+        }
+        Ok(Self {
+            position: v3("position", raw.position)?,
+            rotation: v3("rotation", raw.rotation)?,
+            velocity: v3("velocity", raw.velocity)?,
+            angular_velocity: v3("angular_velocity", raw.angular_velocity)?,
+            name: raw.name,
+            shape: raw.shape,
+            mass,
+            restitution,
+            friction,
+            fixed: raw.fixed.unwrap_or(false),
+        })
+    }
+}
+
+fn positive(field: &str, v: Scalar, unit: &str) -> Result<Scalar, (String, String)> {
+    if v.is_finite() && v > 0.0 { Ok(v) } else { Err((field.into(), format!("must be a finite number > 0 {unit}, got {v}"))) }
+}
+
+/// The RON options of every scene: bare optionals (`mass: 1.0`, CONTRACTS.md §2) and a
+/// nesting bound.
+#[must_use]
+pub fn ron_options() -> ron::Options {
+    ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .with_recursion_limit(MAX_NESTING)
+}
+
+/// Parses scene text; `path` names it in errors.
+pub fn parse(text: &str, path: &Path) -> Result<SceneDef, SceneError> {
+    let scene: SceneDef = ron_options().from_str(text).map_err(|e| parse_error(e, text, path))?;
+    check_scene(&scene, path)?;
+    Ok(scene)
+}
+
+/// Reads and parses a scene file.
+pub fn load(path: &Path) -> Result<SceneDef, SceneError> {
+    let io = |source| SceneError::Io { path: path.to_path_buf(), source };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::Read::take(file, MAX_SCENE_BYTES + 1), &mut bytes).map_err(io)?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(invalid(path, "scene", "file", format!("larger than {} MiB", MAX_SCENE_BYTES >> 20)));
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
+        let (line, col) = line_col(&text, at);
+        SceneError::Parse {
+            path: path.to_path_buf(),
+            line,
+            col,
+            message: "not UTF-8 text (is this a binary file?)".into(),
+            text: NamedSource::new(path.display().to_string(), text),
+            at: at.into(),
+        }
+    })?;
+    parse(&text, path)
+}
+
+fn parse_error(e: ron::error::SpannedError, text: &str, path: &Path) -> SceneError {
+    let (line, col) = (e.span.start.line.max(1), e.span.start.col.max(1));
+    let offset = offset_of(text, line, col);
+    SceneError::Parse {
+        path: path.to_path_buf(),
+        line,
+        col,
+        message: e.code.to_string(),
+        text: NamedSource::new(path.display().to_string(), text.to_string()),
+        at: offset.into(),
+    }
+}
+
+fn offset_of(text: &str, line: usize, col: usize) -> usize {
+    let start: usize = text.split_inclusive('\n').take(line - 1).map(str::len).sum();
+    let line_text = text.get(start..).unwrap_or("").lines().next().unwrap_or("");
+    (start + line_text.char_indices().nth(col - 1).map_or(line_text.len(), |(i, _)| i)).min(text.len())
+}
+
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text.as_bytes()[..offset.min(text.len())];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let col = before.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
+    (line, col)
+}
+
+/// An `Invalid` error for `actor`'s `field`.
+pub fn invalid(path: &Path, actor: &str, field: &str, reason: String) -> SceneError {
+    SceneError::Invalid { path: path.to_path_buf(), actor: actor.to_string(), field: field.to_string(), reason }
+}
+
+fn check_scene(scene: &SceneDef, path: &Path) -> Result<(), SceneError> {
+    if !(scene.dt.is_finite() && scene.dt > 0.0) {
+        return Err(invalid(path, "scene", "dt", format!("must be a finite number > 0 s, got {}", scene.dt)));
+    }
+    if !crate::math::is_finite_vector(vector(scene.gravity)) {
+        return Err(invalid(path, "scene", "gravity", "must be finite".into()));
+    }
+    let s = scene.solver;
+    if !(1..=1000).contains(&s.max_sweeps) {
+        return Err(invalid(path, "scene", "solver.max_sweeps", format!("must be 1..=1000, got {}", s.max_sweeps)));
+    }
+    for (field, v) in [("solver.correction", s.correction), ("solver.slop", s.slop)] {
+        if !(0.0..=1.0).contains(&v) {
+            return Err(invalid(path, "scene", field, format!("must be in 0..=1, got {v}")));
+        }
+    }
+    Ok(())
+}
+
+/// Where relative paths in a scene (OBJ files) are resolved from.
+#[must_use]
+pub fn base_dir(path: &Path) -> PathBuf {
+    path.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+}

@@ -1,0 +1,128 @@
+//! The schedule: an ordered list of named systems, edited by name, run and timed by one
+//! runner (DESIGN.md §5). Systems are plain functions, so a user's own system from outside the
+//! crate has the same powers as the shipped ones.
+
+use crate::components::Name;
+use crate::error::{ScheduleError, StepError};
+use crate::step::StepContext;
+use hecs::World;
+use std::time::{Duration, Instant};
+
+/// The signature of every system.
+pub type SystemFn = fn(&mut World, &mut StepContext);
+
+/// A named stage of the pipeline.
+#[derive(Clone, Copy, Debug)]
+pub struct System {
+    /// Unique name in a schedule (`cull`, `face`, ...).
+    pub name: &'static str,
+    /// The function run each step.
+    pub run: SystemFn,
+}
+
+/// Time spent in each part of one step; `rigid bench` averages these into `systems_ms`.
+#[derive(Clone, Debug, Default)]
+pub struct StepProfile {
+    /// `begin_step`: clearing buffers and taking the snapshot.
+    pub snapshot: Duration,
+    /// Each system, in run order.
+    pub systems: Vec<(&'static str, Duration)>,
+}
+
+/// Ordered systems, run in sequence each step.
+#[derive(Clone, Debug, Default)]
+pub struct Schedule {
+    systems: Vec<System>,
+}
+
+impl Schedule {
+    /// A schedule of these systems, in order; names must be unique.
+    pub fn new(systems: impl IntoIterator<Item = System>) -> Result<Self, ScheduleError> {
+        let mut schedule = Self::default();
+        for s in systems {
+            schedule.push(s)?;
+        }
+        Ok(schedule)
+    }
+
+    /// Appends a system at the end.
+    pub fn push(&mut self, system: System) -> Result<(), ScheduleError> {
+        self.check_new(system.name)?;
+        self.systems.push(system);
+        Ok(())
+    }
+
+    /// Inserts `system` just before the system named `anchor`.
+    pub fn insert_before(&mut self, anchor: &str, system: System) -> Result<(), ScheduleError> {
+        let at = self.position(anchor)?;
+        self.check_new(system.name)?;
+        self.systems.insert(at, system);
+        Ok(())
+    }
+
+    /// Inserts `system` just after the system named `anchor`.
+    pub fn insert_after(&mut self, anchor: &str, system: System) -> Result<(), ScheduleError> {
+        let at = self.position(anchor)?;
+        self.check_new(system.name)?;
+        self.systems.insert(at + 1, system);
+        Ok(())
+    }
+
+    /// Puts `system` in the place of the one named `name` (it may keep or change the name).
+    pub fn replace(&mut self, name: &str, system: System) -> Result<(), ScheduleError> {
+        let at = self.position(name)?;
+        if system.name != name {
+            self.check_new(system.name)?;
+        }
+        self.systems[at] = system;
+        Ok(())
+    }
+
+    /// Removes the system named `name` and returns it.
+    pub fn remove(&mut self, name: &str) -> Result<System, ScheduleError> {
+        let at = self.position(name)?;
+        Ok(self.systems.remove(at))
+    }
+
+    /// The names, in run order.
+    #[must_use]
+    pub fn names(&self) -> Vec<&'static str> {
+        self.systems.iter().map(|s| s.name).collect()
+    }
+
+    /// Runs one step: snapshot, then every system in order, each timed into `profile`. After
+    /// each system the NaN guard checks the bodies, so a bad state is stopped where it starts
+    /// and named (system, actor, field) instead of spreading.
+    pub fn run(&self, world: &mut World, ctx: &mut StepContext, profile: &mut StepProfile) -> Result<(), StepError> {
+        let start = Instant::now();
+        ctx.begin_step(world);
+        profile.snapshot = start.elapsed();
+        profile.systems.clear();
+        for system in &self.systems {
+            let start = Instant::now();
+            (system.run)(world, ctx);
+            profile.systems.push((system.name, start.elapsed()));
+            if let Some((row, field)) = ctx.bodies.first_non_finite() {
+                let actor = world
+                    .get::<&Name>(ctx.bodies.entity[row])
+                    .map_or_else(|_| format!("#{row}"), |n| n.0.clone());
+                return Err(StepError { step: ctx.step, system: system.name.to_string(), actor, field });
+            }
+        }
+        Ok(())
+    }
+
+    fn position(&self, name: &str) -> Result<usize, ScheduleError> {
+        self.systems.iter().position(|s| s.name == name).ok_or_else(|| ScheduleError::Unknown {
+            name: name.to_string(),
+            valid: self.names().iter().map(ToString::to_string).collect(),
+        })
+    }
+
+    fn check_new(&self, name: &str) -> Result<(), ScheduleError> {
+        if self.systems.iter().any(|s| s.name == name) {
+            return Err(ScheduleError::Duplicate { name: name.to_string() });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,181 @@
+//! What a system sees besides the world: `StepContext` with its settings, the body snapshot,
+//! the posed-mesh cache, the pair list and the step's statistics. Buffers are cleared, never
+//! freed, so once grown a step allocates nothing.
+
+use crate::bodies::Bodies;
+use crate::components::Pose;
+use crate::contact::{Feature, Pair};
+use crate::geometry::Posed;
+use crate::math::{Scalar, Vector};
+use crate::mesh::MeshTable;
+use hecs::World;
+use rayon::prelude::*;
+
+/// Settings of the pipeline that a scene or the CLI may change.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    /// Gravity [m/s²].
+    pub gravity: Vector,
+    /// Most impulse sweeps over the contacts per step (PHYSICS.md §2.5). Sweeps stop earlier
+    /// when one applies no impulse; the cap matters for e = 1 bodies squeezed between walls.
+    pub max_sweeps: u32,
+    /// Fraction β of the penetration removed per step by `correct` (PHYSICS.md §2.6).
+    pub correction: Scalar,
+    /// Penetration left alone, as a fraction of the thinner body's thickness (the slop).
+    pub slop: Scalar,
+    /// Largest correction per step, as a fraction of the thinner body's thickness: a wrong
+    /// normal must not throw a body across the scene (§2.6).
+    pub max_correction: Scalar,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self { gravity: Vector::new(0.0, -9.81, 0.0), max_sweeps: 20, correction: 0.4, slop: 0.005, max_correction: 0.2 }
+    }
+}
+
+/// Counts of one step, filled by the systems.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StepStats {
+    /// Candidate pairs from the broad phase.
+    pub candidates: usize,
+    /// Contacts found, by feature (face, vertex, edge).
+    pub found: [u64; 3],
+    /// Impulses applied, by feature of the contact.
+    pub impulses: [u64; 3],
+    /// Impulse sweeps used by `resolve`.
+    pub sweeps: u32,
+}
+
+impl StepStats {
+    /// Adds one impulse for a contact found by `feature`.
+    pub fn count_impulse(&mut self, feature: Feature) {
+        self.impulses[feature as usize] += 1;
+    }
+}
+
+/// World vertices and planes per body, filled once per step and only for bodies that are in
+/// candidate pairs (DESIGN.md §3).
+#[derive(Clone, Debug, Default)]
+pub struct PosedCache {
+    entries: Vec<Posed>,
+    /// Entry i matches body i's current pose.
+    fresh: Vec<bool>,
+    /// Scratch: body i is in a candidate pair.
+    wanted: Vec<bool>,
+}
+
+impl PosedCache {
+    /// The posed mesh of body `i`; valid once `StepContext::pose_candidates` ran this step.
+    #[must_use]
+    pub fn get(&self, i: u32) -> &Posed {
+        debug_assert!(self.fresh[i as usize], "body {i} was not posed this step");
+        &self.entries[i as usize]
+    }
+
+    fn reset(&mut self, meshes: &MeshTable, bodies: &Bodies) {
+        self.entries.clear();
+        self.entries.extend((0..bodies.len()).map(|i| {
+            let pose = Pose { position: bodies.position[i], orientation: bodies.orientation[i] };
+            Posed::new(meshes.get_arc(bodies.mesh[i]), &pose)
+        }));
+        self.fresh.clear();
+        self.fresh.resize(bodies.len(), false);
+        self.wanted.clear();
+        self.wanted.resize(bodies.len(), false);
+    }
+}
+
+/// Reused buffers of the grid broad phase (`cull`).
+#[derive(Clone, Debug, Default)]
+pub struct CullScratch {
+    /// Copy of the radii for the median.
+    pub radii: Vec<Scalar>,
+    /// Bodies too large for the grid.
+    pub large: Vec<u32>,
+    /// Cell of each body (`u32::MAX` for large ones).
+    pub cell_of: Vec<u32>,
+    /// Prefix sums: bodies of cell c are `order[cell_start[c]..cell_start[c + 1]]`.
+    pub cell_start: Vec<u32>,
+    /// Fill cursors while binning.
+    pub fill: Vec<u32>,
+    /// Bodies sorted by cell.
+    pub order: Vec<u32>,
+    /// Pairs found per chunk of bodies, concatenated in order.
+    pub chunks: Vec<Vec<Pair>>,
+}
+
+/// Reused allocations of the shipped systems.
+#[derive(Clone, Debug, Default)]
+pub struct Scratch {
+    /// For `cull`.
+    pub cull: CullScratch,
+}
+
+/// Everything a system may read or write besides the world (DESIGN.md §4).
+#[derive(Debug, Default)]
+pub struct StepContext {
+    /// Time step [s].
+    pub dt: Scalar,
+    /// Pipeline settings.
+    pub params: Params,
+    /// Each mesh once.
+    pub meshes: MeshTable,
+    /// Snapshot of the actors; `begin_step` loads it, resolve/correct/integrate update rows.
+    pub bodies: Bodies,
+    /// Posed meshes, filled on first use in a step.
+    pub posed: PosedCache,
+    /// Pairs: cull → face/vertex/edge → resolve → correct. Sorted by (a, b).
+    pub pairs: Vec<Pair>,
+    /// This step's counts.
+    pub stats: StepStats,
+    /// Reused allocations.
+    pub scratch: Scratch,
+    /// Number of the step being computed (1 for the first).
+    pub step: u64,
+}
+
+impl StepContext {
+    /// Starts a step: clears the buffers and snapshots the world.
+    pub fn begin_step(&mut self, world: &World) {
+        self.step += 1;
+        self.pairs.clear();
+        self.stats = StepStats::default();
+        self.reload(world);
+    }
+
+    /// Re-reads the world after a custom system edited it directly (DESIGN.md §3).
+    pub fn reload(&mut self, world: &World) {
+        let before = self.bodies.len();
+        self.bodies.load(world);
+        if self.posed.entries.len() != self.bodies.len() || before != self.bodies.len() {
+            self.posed.reset(&self.meshes, &self.bodies);
+        }
+        self.posed.fresh.iter_mut().for_each(|f| *f = false);
+    }
+
+    /// Marks body `i` as moved, so the next `pose_candidates` poses it again.
+    pub fn mark_moved(&mut self, i: usize) {
+        self.posed.fresh[i] = false;
+    }
+
+    /// Poses every body that appears in a `Candidate` pair and was not posed since it last
+    /// moved. Detectors call it first; the second call in a step finds nothing to do.
+    pub fn pose_candidates(&mut self) {
+        let cache = &mut self.posed;
+        cache.wanted.iter_mut().for_each(|w| *w = false);
+        for p in self.pairs.iter().filter(|p| p.is_candidate()) {
+            cache.wanted[p.a as usize] = true;
+            cache.wanted[p.b as usize] = true;
+        }
+        let bodies = &self.bodies;
+        cache.entries.par_iter_mut().zip(cache.fresh.par_iter_mut()).zip(cache.wanted.par_iter()).enumerate().for_each(
+            |(i, ((posed, fresh), &wanted))| {
+                if wanted && !*fresh {
+                    posed.update(&Pose { position: bodies.position[i], orientation: bodies.orientation[i] });
+                    *fresh = true;
+                }
+            },
+        );
+    }
+}

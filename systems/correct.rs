@@ -1,0 +1,60 @@
+//! `correct`: positional correction of penetration (PHYSICS.md §2.6, erratum E14). Moves
+//! positions only: velocities, momentum and kinetic energy are untouched.
+
+use crate::math::{Scalar, Vector};
+use crate::step::{Params, StepContext};
+use hecs::World;
+
+/// How far to push a pair apart along its normal [m]:
+/// `C = min(β · max(depth − slop, 0), cap)`, with slop and cap scaled by the thinner body's
+/// thickness.
+#[must_use]
+pub fn correction(depth: Scalar, thickness: Scalar, params: &Params) -> Scalar {
+    (params.correction * (depth - params.slop * thickness).max(0.0)).min(params.max_correction * thickness)
+}
+
+/// Pushes every contact's bodies apart in proportion to their inverse masses, which keeps the
+/// system's centre of mass fixed (§2.6). It changes the angular momentum about the origin, so
+/// conservation tests measure before it or remove it (`Schedule::remove("correct")`).
+///
+/// - Reads: `ctx.pairs` (`Found`, `Resolved`), `ctx.bodies`, `ctx.meshes`.
+/// - Writes: `ctx.bodies` positions (and the world's); marks moved bodies for re-posing.
+/// - Paper: none (the paper leaves overlaps in place: E14); PHYSICS.md §2.6.
+/// - Cost: O(C) for C contacts.
+pub fn correct(world: &mut World, ctx: &mut StepContext) {
+    let mut moved = false;
+    for k in 0..ctx.pairs.len() {
+        let pair = ctx.pairs[k];
+        let Some(contact) = pair.contact() else { continue };
+        let (ia, ib) = (pair.a as usize, pair.b as usize);
+        let b = &ctx.bodies;
+        let (wa, wb) = (b.inv_mass[ia], b.inv_mass[ib]);
+        let thickness = ctx.meshes.get(b.mesh[ia]).thickness.min(ctx.meshes.get(b.mesh[ib]).thickness);
+        let c = correction(contact.depth, thickness, &ctx.params);
+        if c <= 0.0 || wa + wb == 0.0 {
+            continue;
+        }
+        let shift: Vector = contact.normal * (c / (wa + wb));
+        ctx.bodies.position[ia] += shift * wa;
+        ctx.bodies.position[ib] -= shift * wb;
+        ctx.mark_moved(ia);
+        ctx.mark_moved(ib);
+        moved = true;
+    }
+    if moved {
+        ctx.bodies.store(world);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn correction_removes_beta_of_the_depth_past_the_slop_and_is_capped() {
+        let p = Params { correction: 0.5, slop: 0.01, max_correction: 0.2, ..Params::default() };
+        assert_eq!(correction(0.11, 1.0, &p), 0.5 * (0.11 - 0.01));
+        assert_eq!(correction(0.005, 1.0, &p), 0.0);
+        assert_eq!(correction(5.0, 1.0, &p), 0.2);
+    }
+}

@@ -1,0 +1,201 @@
+//! `cull`: the broad phase. Bounding spheres about the centre of mass overlap
+//! (PHYSICS.md §1.2, erratum E1). Two systems share the predicate and emit the same sorted pair
+//! list: `cull_all_pairs`, the paper's O(N²) loop kept as the reference, and `cull`, a uniform
+//! grid, near-linear in N.
+
+use crate::contact::Pair;
+use crate::math::{Scalar, Vector};
+use crate::step::{CullScratch, StepContext};
+use hecs::World;
+use rayon::prelude::*;
+
+/// The candidate test: `|x_a − x_b| ≤ r_a + r_b`. The paper compares half a centre-to-corner
+/// distance against each radius separately, which misses touching cubes (E1).
+#[must_use]
+pub fn spheres_overlap(xa: Vector, ra: Scalar, xb: Vector, rb: Scalar) -> bool {
+    let r = ra + rb;
+    (xa - xb).length_squared() <= r * r
+}
+
+/// The paper's all-pairs broad phase: every pair (a < b) whose spheres overlap, skipping
+/// pairs of two fixed actors (they never move, so never need an impulse).
+///
+/// - Reads: `ctx.bodies`. Writes: `ctx.pairs` (appends `Candidate`s, sorted), `ctx.stats`.
+/// - Paper: bounding box check; PHYSICS.md §1.2, E1. Cost: O(N²).
+pub fn cull_all_pairs(_world: &mut World, ctx: &mut StepContext) {
+    let b = &ctx.bodies;
+    for i in 0..b.len() {
+        for j in i + 1..b.len() {
+            if !(b.is_fixed(i) && b.is_fixed(j)) && spheres_overlap(b.position[i], b.radius[i], b.position[j], b.radius[j]) {
+                ctx.pairs.push(Pair::candidate(i as u32, j as u32));
+            }
+        }
+    }
+    ctx.stats.candidates = ctx.pairs.len();
+}
+
+/// Radii more than this many times the median go on the short "large" list tested against
+/// everything, so one wall does not blow up the cell size for thousands of small bodies.
+const LARGE_RADIUS_FACTOR: Scalar = 4.0;
+/// The grid may have at most this many cells per ordinary body (memory bound for sparse
+/// scenes: the cell grows until it fits).
+const CELLS_PER_BODY: usize = 4;
+/// Bodies per parallel work chunk of the pair search.
+const CHUNK: usize = 1024;
+
+/// Uniform-grid broad phase, the default: the same pairs, in the same order, as
+/// `cull_all_pairs`.
+///
+/// - Reads: `ctx.bodies`. Writes: `ctx.pairs`, `ctx.stats`, `ctx.scratch.cull`.
+/// - Paper: bounding box check (its all-pairs loop replaced; DESIGN.md §6 says why a grid and
+///   not sweep-and-prune: box-gas's slabs of equal cubes overlap on any one axis).
+/// - Cost: O(N) to bin, O(N·k) for k neighbours per body, plus O(N·L) for L large bodies.
+pub fn cull(_world: &mut World, ctx: &mut StepContext) {
+    let n = ctx.bodies.len();
+    let s = &mut ctx.scratch.cull;
+    let b = &ctx.bodies;
+    let threshold = large_threshold(&b.radius, &mut s.radii);
+    s.large.clear();
+    s.large.extend((0..n as u32).filter(|&i| b.radius[i as usize] > threshold));
+    let grid = Grid::build(b, threshold, s);
+    let chunks = n.div_ceil(CHUNK);
+    if s.chunks.len() < chunks {
+        s.chunks.resize_with(chunks, Vec::new);
+    }
+    let (large, cells) = (&s.large, (&s.cell_start, &s.order, &s.cell_of));
+    s.chunks[..chunks].par_iter_mut().enumerate().for_each(|(c, out)| {
+        out.clear();
+        for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+            let start = out.len();
+            grid.pairs_of(i, b, cells, large, out);
+            out[start..].sort_unstable_by_key(|p| p.b);
+        }
+    });
+    for chunk in &s.chunks[..chunks] {
+        ctx.pairs.extend_from_slice(chunk);
+    }
+    ctx.stats.candidates = ctx.pairs.len();
+}
+
+/// `LARGE_RADIUS_FACTOR` × the median radius (∞ when there are no bodies).
+fn large_threshold(radius: &[Scalar], buffer: &mut Vec<Scalar>) -> Scalar {
+    if radius.is_empty() {
+        return Scalar::INFINITY;
+    }
+    buffer.clear();
+    buffer.extend_from_slice(radius);
+    let mid = buffer.len() / 2;
+    let (_, median, _) = buffer.select_nth_unstable_by(mid, Scalar::total_cmp);
+    LARGE_RADIUS_FACTOR * *median
+}
+
+/// A dense grid over the ordinary bodies, binned by counting sort.
+#[derive(Clone, Copy)]
+struct Grid {
+    origin: Vector,
+    cell: Scalar,
+    dims: [usize; 3],
+    threshold: Scalar,
+}
+
+impl Grid {
+    fn build(b: &crate::bodies::Bodies, threshold: Scalar, s: &mut CullScratch) -> Self {
+        let ordinary = || (0..b.len()).filter(|&i| b.radius[i] <= threshold);
+        let (mut lo, mut hi, mut r_max) = (Vector::splat(Scalar::INFINITY), Vector::splat(Scalar::NEG_INFINITY), 0.0_f64);
+        let mut count = 0;
+        for i in ordinary() {
+            lo = lo.min(b.position[i]);
+            hi = hi.max(b.position[i]);
+            r_max = r_max.max(b.radius[i]);
+            count += 1;
+        }
+        // Two overlapping ordinary spheres have centres at most 2·r_max apart: with cells at
+        // least that wide, they sit in the same or neighbouring cells.
+        let mut cell = (2.0 * r_max).max(Scalar::MIN_POSITIVE);
+        let extent = if count == 0 { Vector::ZERO } else { hi - lo };
+        let dims_for = |cell: Scalar| (extent / cell).to_array().map(|e| e.floor() as usize + 1);
+        let mut dims = dims_for(cell);
+        while dims.iter().product::<usize>() > CELLS_PER_BODY * count.max(1) {
+            cell *= 1.5;
+            dims = dims_for(cell);
+        }
+        let grid = Self { origin: lo, cell, dims, threshold };
+        let cells = dims.iter().product::<usize>();
+        s.cell_of.clear();
+        s.cell_of.resize(b.len(), u32::MAX);
+        s.cell_start.clear();
+        s.cell_start.resize(cells + 1, 0);
+        for i in ordinary() {
+            let c = grid.index(grid.coords(b.position[i]));
+            s.cell_of[i] = c as u32;
+            s.cell_start[c + 1] += 1;
+        }
+        for c in 0..cells {
+            s.cell_start[c + 1] += s.cell_start[c];
+        }
+        s.order.clear();
+        s.order.resize(count, 0);
+        s.fill.clear();
+        s.fill.extend_from_slice(&s.cell_start);
+        for i in ordinary() {
+            let c = s.cell_of[i] as usize;
+            s.order[s.fill[c] as usize] = i as u32;
+            s.fill[c] += 1;
+        }
+        grid
+    }
+
+    fn coords(&self, x: Vector) -> [usize; 3] {
+        let c = ((x - self.origin) / self.cell).to_array();
+        [0, 1, 2].map(|k| (c[k].floor().max(0.0) as usize).min(self.dims[k] - 1))
+    }
+
+    fn index(&self, c: [usize; 3]) -> usize {
+        (c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]
+    }
+
+    /// Appends the candidates (i, j > i) of body i, unsorted.
+    fn pairs_of(&self, i: usize, b: &crate::bodies::Bodies, (start, order, _): (&Vec<u32>, &Vec<u32>, &Vec<u32>), large: &[u32], out: &mut Vec<Pair>) {
+        let (xi, ri) = (b.position[i], b.radius[i]);
+        let test = |j: usize, out: &mut Vec<Pair>| {
+            if j > i && !(b.is_fixed(i) && b.is_fixed(j)) && spheres_overlap(xi, ri, b.position[j], b.radius[j]) {
+                out.push(Pair::candidate(i as u32, j as u32));
+            }
+        };
+        if ri > self.threshold {
+            (i + 1..b.len()).for_each(|j| test(j, out));
+            return;
+        }
+        let c = self.coords(xi);
+        let range = |k: usize| c[k].saturating_sub(1)..=(c[k] + 1).min(self.dims[k] - 1);
+        for z in range(2) {
+            for y in range(1) {
+                let row = self.index([0, y, z]);
+                let (x0, x1) = (*range(0).start(), *range(0).end());
+                for &j in &order[start[row + x0] as usize..start[row + x1 + 1] as usize] {
+                    test(j as usize, out);
+                }
+            }
+        }
+        for &j in large {
+            test(j as usize, out);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounding_check_matches_t_bc() {
+        // T-BC: unit cubes (ρ = √3/2) 1.7 apart are candidates, 1.75 apart are not.
+        let r = 3f64.sqrt() / 2.0;
+        assert!(spheres_overlap(Vector::ZERO, r, Vector::new(1.7, 0.0, 0.0), r));
+        assert!(!spheres_overlap(Vector::ZERO, r, Vector::new(1.75, 0.0, 0.0), r));
+        // Case (c): 0.1 cube at (0.9, 0.14, 0) over the 2 m rod (ρ = 1.00995): candidate, which
+        // both readings of the paper's check miss (E1).
+        let rod = (1.0f64 + 0.01 + 0.01).sqrt();
+        assert!(spheres_overlap(Vector::ZERO, rod, Vector::new(0.9, 0.14, 0.0), 0.1 * r));
+    }
+}

@@ -1,0 +1,79 @@
+//! `edge`: the paper's edge test. An edge of one body crossing the other
+//! (PHYSICS.md §1.5, erratum E4).
+
+use crate::contact::{Contact, Feature};
+use crate::geometry::{clip_segment, depth_along, Posed};
+use crate::math::Scalar;
+use crate::step::StepContext;
+use hecs::World;
+
+/// Smallest |n_in × n_out| (unit normals) taken as two distinct planes; below it the edge
+/// passes through (nearly) parallel faces and the closest-face fallback gives the normal.
+const PARALLEL_PLANES: Scalar = 1e-9;
+
+/// Gives each remaining candidate pair an edge contact, testing both directions.
+///
+/// - Reads: `ctx.pairs` (`Candidate` only), `ctx.posed`.
+/// - Writes: `ctx.pairs` (`Candidate` → `Found`), `ctx.posed` (fills the cache).
+/// - Paper: edge test; PHYSICS.md §1.5 and erratum E4.
+/// - Cost: O(E_A·F_B + E_B·F_A) per candidate pair (clipping, not the paper's sort).
+pub fn edge(_world: &mut World, ctx: &mut StepContext) {
+    super::face::detect(ctx, edge_contact);
+}
+
+/// The first edge of `a` (sorted order) that crosses convex `b`: the midpoint of its inside
+/// part as the point, and the edge–edge normal `e_A × e_B` with `e_B = n_in × n_out`, the line
+/// where the entry and exit planes meet, oriented into the cone of `b`'s outward normals
+/// (from `b` to `a`). The paper's `e_A × n_f` lies in the face plane: tangential, no impulse
+/// (E4).
+#[must_use]
+pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
+    let eps = b.tolerance();
+    for &[i, j] in &a.mesh.edges {
+        let (v0, v1) = (a.vertices[i as usize], a.vertices[j as usize]);
+        let Some(clip) = clip_segment(b, v0, v1, eps) else { continue };
+        let point = v0 + 0.5 * (clip.t_in + clip.t_out) * (v1 - v0);
+        let e_a = v1 - v0;
+        let crossing = match (clip.plane_in, clip.plane_out) {
+            (Some(fi), Some(fo)) => {
+                let (n_in, n_out) = (b.planes[fi].normal, b.planes[fo].normal);
+                let e_b = n_in.cross(n_out);
+                let n = e_a.cross(e_b);
+                // The guard of §1.5: a positive combination of the two outward normals.
+                (e_b.length() > PARALLEL_PLANES && n.length() > PARALLEL_PLANES * e_a.length() * e_b.length())
+                    .then(|| n.normalize())
+                    .map(|n| if n.dot(n_in + n_out) < 0.0 { -n } else { n })
+            }
+            _ => None,
+        };
+        let normal = crossing.unwrap_or_else(|| b.planes[b.max_plane_distance(point).1].normal);
+        return Some(Contact { point, normal, depth: depth_along(a, b, normal), feature: Feature::Edge });
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::components::Pose;
+    use crate::math::{from_euler_degrees, Vector};
+    use crate::mesh::ConvexMesh;
+    use std::sync::Arc;
+
+    fn cube(x: Vector, degrees: Vector) -> Posed {
+        let pose = Pose { position: x, orientation: from_euler_degrees(degrees) };
+        Posed::new(Arc::new(ConvexMesh::cuboid(Vector::ONE)), &pose)
+    }
+
+    #[test]
+    fn crossing_ridges_give_the_vertical_edge_edge_normal() {
+        // PHYSICS.md §4 (f2), x_A = 0.25: p = (0.25, √2/2 − 0.01, 0), n = (0, 1, 0).
+        let h = 2f64.sqrt();
+        let a = cube(Vector::new(0.25, h - 0.01, 0.0), Vector::new(0.0, 0.0, 45.0));
+        let b = cube(Vector::ZERO, Vector::new(45.0, 0.0, 0.0));
+        let c = edge_contact(&a, &b).expect("A's lowest edge crosses B's ridge");
+        assert!((c.point - Vector::new(0.25, h / 2.0 - 0.01, 0.0)).length() < 1e-9, "{c:?}");
+        assert!((c.normal - Vector::Y).length() < 1e-12, "{c:?}");
+        assert!((c.depth - 0.01).abs() < 1e-12);
+    }
+}

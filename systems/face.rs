@@ -1,0 +1,107 @@
+//! `face`: the paper's face test. Triangle centroids of one body inside the other
+//! (PHYSICS.md §1.3, errata E2 and E3).
+
+use crate::contact::{Contact, Feature, PairState};
+use crate::geometry::{depth_along, is_inside, Posed};
+use crate::math::{Scalar, Vector};
+use crate::step::StepContext;
+use hecs::World;
+use rayon::prelude::*;
+
+/// Below this fraction of the colliding area, the summed area-normal has cancelled out (the
+/// colliding triangles face every way) and the closest face of B gives the normal (§1.3).
+const CANCELLED_NORMAL: Scalar = 1e-6;
+
+/// Gives each candidate pair a face contact, testing both directions.
+///
+/// - Reads: `ctx.pairs` (`Candidate` only), `ctx.posed`.
+/// - Writes: `ctx.pairs` (`Candidate` → `Found`), `ctx.posed` (fills the cache).
+/// - Paper: face test; PHYSICS.md §1.3, errata E2, E3; order of §1.6.
+/// - Cost: O(F_A·F_B) per candidate pair.
+pub fn face(_world: &mut World, ctx: &mut StepContext) {
+    detect(ctx, face_contact);
+}
+
+/// Runs `kernel` both ways on every candidate pair and records the first hit (PHYSICS.md
+/// §1.6): the (B, A) result has its normal flipped so it still points from B to A.
+pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option<Contact>) {
+    ctx.pose_candidates();
+    let posed = &ctx.posed;
+    ctx.pairs.par_iter_mut().filter(|p| p.is_candidate()).for_each(|pair| {
+        let (a, b) = (posed.get(pair.a), posed.get(pair.b));
+        if let Some(contact) = kernel(a, b).or_else(|| kernel(b, a).map(Contact::flipped)) {
+            pair.state = PairState::Found(contact);
+        }
+    });
+    for pair in &ctx.pairs {
+        if let PairState::Found(c) = pair.state {
+            ctx.stats.found[c.feature as usize] += 1;
+        }
+    }
+}
+
+/// Triangles of `a` whose centroid is inside convex `b`, as one contact: the mean of those
+/// centroids, the normal `−normalize(Σ area·n)` of `a`'s colliding triangles (they face from
+/// `a` into `b`; negated, from `b` to `a`: E3), and the projection overlap as depth (§2.6).
+/// The mean of a square face's two centroids is its centre, so aligned boxes get no spin.
+#[must_use]
+pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
+    let (mut sum_point, mut count) = (Vector::ZERO, 0_u32);
+    let (mut sum_normal, mut sum_area) = (Vector::ZERO, 0.0);
+    for t in &a.mesh.triangles {
+        let [p0, p1, p2] = t.map(|i| a.vertices[i as usize]);
+        let centroid = (p0 + p1 + p2) / 3.0;
+        if is_inside(b, centroid) {
+            let area_normal = 0.5 * (p1 - p0).cross(p2 - p0);
+            sum_point += centroid;
+            count += 1;
+            sum_normal += area_normal;
+            sum_area += area_normal.length();
+        }
+    }
+    if count == 0 {
+        return None;
+    }
+    let point = sum_point / Scalar::from(count);
+    let normal = if sum_normal.length() < CANCELLED_NORMAL * sum_area {
+        b.planes[b.max_plane_distance(point).1].normal
+    } else {
+        -sum_normal.normalize()
+    };
+    Some(Contact { point, normal, depth: depth_along(a, b, normal), feature: Feature::Face })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::components::Pose;
+    use crate::mesh::ConvexMesh;
+    use std::sync::Arc;
+
+    fn cube(size: Vector, x: Vector) -> Posed {
+        Posed::new(Arc::new(ConvexMesh::cuboid(size)), &Pose::from_position(x))
+    }
+
+    #[test]
+    fn head_on_cubes_give_the_face_centre_and_a_normal_from_b_to_a() {
+        // PHYSICS.md §4 (a): A at x = −0.99 into B at 0: p = (−0.49, 0, 0), n = (−1, 0, 0).
+        let a = cube(Vector::ONE, Vector::new(-0.99, 0.0, 0.0));
+        let b = cube(Vector::ONE, Vector::ZERO);
+        let c = face_contact(&a, &b).expect("A's +x face is inside B");
+        assert!((c.point - Vector::new(-0.49, 0.0, 0.0)).length() < 1e-15);
+        assert_eq!(c.normal, -Vector::X);
+        assert!((c.depth - 0.01).abs() < 1e-15);
+    }
+
+    #[test]
+    fn small_cube_on_the_rod_of_case_c() {
+        // (c): the cube's bottom-face centroids lie inside the rod; n from the rod to the cube.
+        let a = cube(Vector::splat(0.1), Vector::new(0.9, 0.14, 0.0));
+        let rod = cube(Vector::new(2.0, 0.2, 0.2), Vector::ZERO);
+        let c = face_contact(&a, &rod).expect("bottom face inside");
+        assert!((c.point - Vector::new(0.9, 0.09, 0.0)).length() < 1e-15);
+        assert_eq!(c.normal, Vector::Y);
+        // The other way nothing of the rod is inside the small cube.
+        assert!(face_contact(&rod, &a).is_none());
+    }
+}

@@ -1,0 +1,71 @@
+//! The pipeline's stages, one file each. The default schedule follows the paper's
+//! "Algorithm Overview", one system per stage (DESIGN.md §5):
+//!
+//! 1. `cull` — bounding-sphere test gives candidate pairs (paper: bounding box check;
+//!    PHYSICS.md §1.2, erratum E1). A uniform grid; `cull_all_pairs` is the paper's O(N²) loop.
+//! 2. `prune` — drops candidates that a separating plane proves apart, so the paper's tests
+//!    below only see pairs they could fire on (they still decide every contact).
+//! 3. `face` — triangle centroids inside the other body (§1.3, errata E2, E3).
+//! 4. `vertex` — vertices inside the other body (§1.4, E5).
+//! 5. `edge` — edges crossing the other body (§1.5, E4). First hit wins per pair (§1.6, E6).
+//! 6. `resolve` — impulse sweeps over the contacts (§2.5, errata E9–E13).
+//! 7. `correct` — positional correction of penetration (§2.6, E14).
+//! 8. `integrate` — velocities then poses; angular momentum kept (§2.7, E15, E16).
+
+mod correct;
+mod cull;
+mod edge;
+mod face;
+mod integrate;
+mod prune;
+mod resolve;
+mod vertex;
+
+pub use correct::{correct, correction};
+pub use cull::{cull, cull_all_pairs, spheres_overlap};
+pub use edge::{edge, edge_contact};
+pub use face::{face, face_contact};
+pub use integrate::{integrate, rotate_free};
+pub use prune::{prune, separated};
+pub use resolve::{collision_impulse, resolve, BodyState};
+pub use vertex::{vertex, vertex_contact};
+
+use crate::error::ScheduleError;
+use crate::schedule::{Schedule, System};
+
+/// Every shipped system, by name. `find` looks them up; a scene's `schedule` and the CLI's
+/// `--schedule` name them.
+pub const REGISTRY: &[System] = &[
+    System { name: "cull", run: cull },
+    System { name: "cull_all_pairs", run: cull_all_pairs },
+    System { name: "prune", run: prune },
+    System { name: "face", run: face },
+    System { name: "vertex", run: vertex },
+    System { name: "edge", run: edge },
+    System { name: "resolve", run: resolve },
+    System { name: "correct", run: correct },
+    System { name: "integrate", run: integrate },
+];
+
+/// The default order (see the module docs).
+pub const DEFAULT_ORDER: &[&str] = &["cull", "prune", "face", "vertex", "edge", "resolve", "correct", "integrate"];
+
+/// The shipped system called `name`.
+pub fn find(name: &str) -> Result<System, ScheduleError> {
+    REGISTRY.iter().copied().find(|s| s.name == name).ok_or_else(|| ScheduleError::Unknown {
+        name: name.to_string(),
+        valid: REGISTRY.iter().map(|s| s.name.to_string()).collect(),
+    })
+}
+
+/// A schedule of shipped systems in the given order.
+pub fn schedule_of<S: AsRef<str>>(names: &[S]) -> Result<Schedule, ScheduleError> {
+    let systems = names.iter().map(|n| find(n.as_ref())).collect::<Result<Vec<_>, _>>()?;
+    Schedule::new(systems)
+}
+
+/// The default schedule: `cull, prune, face, vertex, edge, resolve, correct, integrate`.
+#[must_use]
+pub fn default_schedule() -> Schedule {
+    schedule_of(DEFAULT_ORDER).expect("the registry holds every default name once")
+}

@@ -1,0 +1,64 @@
+//! `vertex`: the paper's vertex test. Vertices of one body inside the other
+//! (PHYSICS.md §1.4, erratum E5).
+
+use crate::contact::{Contact, Feature};
+use crate::geometry::{depth_along, Posed};
+use crate::math::{Scalar, Vector};
+use crate::step::StepContext;
+use hecs::World;
+
+/// Gives each remaining candidate pair a vertex contact, testing both directions.
+///
+/// - Reads: `ctx.pairs` (`Candidate` only), `ctx.posed`.
+/// - Writes: `ctx.pairs` (`Candidate` → `Found`), `ctx.posed` (fills the cache).
+/// - Paper: vertex test; PHYSICS.md §1.4 and erratum E5.
+/// - Cost: O(V_A·F_B + V_B·F_A) per candidate pair.
+pub fn vertex(_world: &mut World, ctx: &mut StepContext) {
+    super::face::detect(ctx, vertex_contact);
+}
+
+/// All vertices of `a` inside convex `b` as one contact: their mean point, the outward normal
+/// of `b`'s face closest to the deepest one (so from `b` to `a`), and the projection overlap
+/// as depth (§2.6). The mean, not the paper's first vertex, keeps an edge landing flat from
+/// spinning (E5).
+#[must_use]
+pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
+    let eps = b.tolerance();
+    let (mut sum, mut count) = (Vector::ZERO, 0_u32);
+    let mut deepest = (Scalar::INFINITY, 0);
+    for &v in &a.vertices {
+        let (s, f) = b.max_plane_distance(v);
+        if s <= eps {
+            sum += v;
+            count += 1;
+            if s < deepest.0 {
+                deepest = (s, f);
+            }
+        }
+    }
+    if count == 0 {
+        return None;
+    }
+    let normal = b.planes[deepest.1].normal;
+    Some(Contact { point: sum / Scalar::from(count), normal, depth: depth_along(a, b, normal), feature: Feature::Vertex })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::components::Pose;
+    use crate::mesh::ConvexMesh;
+    use crate::shapes::octahedron_raw;
+    use std::sync::Arc;
+
+    #[test]
+    fn octahedron_tip_in_floor_gives_exact_contact() {
+        // Tip at y = 0.375, 0.125 below the floor's top face: exact in binary, so assert_eq!.
+        let floor = Posed::new(Arc::new(ConvexMesh::cuboid(Vector::new(4.0, 1.0, 4.0))), &Pose::IDENTITY);
+        let (v, t) = octahedron_raw(0.5);
+        let octahedron = Arc::new(ConvexMesh::new(v, t).expect("valid").0);
+        let tip = Posed::new(octahedron, &Pose::from_position(Vector::Y * 0.875));
+        let c = vertex_contact(&tip, &floor).expect("the tip is inside the floor");
+        assert_eq!((c.point, c.normal, c.depth), (Vector::Y * 0.375, Vector::Y, 0.125));
+    }
+}
