@@ -3,7 +3,7 @@
 
 use crate::cli::{BenchArgs, Command, RunArgs};
 use crate::error::{SceneError, StepError};
-use crate::output::{state_json, trajectory_rows, write_atomic, TRAJECTORY_HEADER};
+use crate::output::{TRAJECTORY_HEADER, state_json, trajectory_rows, write_atomic};
 use crate::scene::{self, SceneDef};
 use crate::sim::{ActorState, Sim};
 use std::io::{IsTerminal, Write};
@@ -119,14 +119,14 @@ fn run(args: &RunArgs) -> Result<(), AppError> {
         }
         if let Err(e) = sim.step() {
             if let (Some(out), Some(state)) = (&args.out, &last_good) {
-                write_out(out, &state_json(&sim, state))?;
+                write_out(out, state_json(&sim, state))?;
             }
             return Err(e.into());
         }
-        if let Some((p, buf)) = &mut trajectory {
-            if sim.steps % args.every == 0 {
-                trajectory_rows(buf, sim.steps, sim.time, &sim.actors()).map_err(|e| write_error(p, e))?;
-            }
+        if let Some((p, buf)) = &mut trajectory
+            && sim.steps % args.every == 0
+        {
+            trajectory_rows(buf, sim.steps, sim.time, &sim.actors()).map_err(|e| write_error(p, e))?;
         }
         if let Some(bar) = &bar {
             bar.inc(1);
@@ -141,7 +141,7 @@ fn run(args: &RunArgs) -> Result<(), AppError> {
         write_out(p, &bytes)?;
     }
     if let Some(out) = &args.out {
-        write_out(out, &state_json(&sim, &sim.actors()))?;
+        write_out(out, state_json(&sim, &sim.actors()))?;
     }
     if !args.quiet {
         print_summary(&sim, &before, wall);
@@ -183,7 +183,8 @@ fn print_summary(sim: &Sim, before: &crate::sim::Totals, wall: std::time::Durati
     println!("impulses: face {f}, vertex {v}, edge {e}");
     println!("momentum drift |Δp| = {:.3e} kg·m/s", (after.linear_momentum - before.linear_momentum).length());
     let ke0 = before.kinetic_energy;
-    let rel = if ke0 > 0.0 { format!(" ({:+.3e} relative)", (after.kinetic_energy - ke0) / ke0) } else { String::new() };
+    let rel =
+        if ke0 > 0.0 { format!(" ({:+.3e} relative)", (after.kinetic_energy - ke0) / ke0) } else { String::new() };
     println!("kinetic energy {ke0} J -> {} J{rel}", after.kinetic_energy);
 }
 
@@ -210,7 +211,10 @@ fn bench(args: &BenchArgs) -> Result<(), AppError> {
     actors.sort_unstable();
     let mut rows = Vec::new();
     if !args.json {
-        println!("{:>8} {:>8} {:>12} {:>12} {:>14} {:>14} {:>8} {:>10}", "actors", "threads", "mean ms", "median ms", "ke start", "ke end", "escaped", "rss MiB");
+        println!(
+            "{:>8} {:>8} {:>12} {:>12} {:>14} {:>14} {:>8} {:>10}",
+            "actors", "threads", "mean ms", "median ms", "ke start", "ke end", "escaped", "rss MiB"
+        );
     }
     for n in actors {
         let r = crate::bench::run_box_gas(n, args.steps, args.warmup, args.seed, threads)?;
@@ -219,7 +223,14 @@ fn bench(args: &BenchArgs) -> Result<(), AppError> {
         } else {
             println!(
                 "{:>8} {:>8} {:>12.3} {:>12.3} {:>14.4} {:>14.4} {:>8} {:>10.1}",
-                r.actors, r.threads, r.mean_ms_per_step, r.median_ms_per_step, r.ke_start, r.ke_end, r.escaped, r.peak_rss_mib
+                r.actors,
+                r.threads,
+                r.mean_ms_per_step,
+                r.median_ms_per_step,
+                r.ke_start,
+                r.ke_end,
+                r.escaped,
+                r.peak_rss_mib
             );
             let parts: Vec<String> = r.systems_ms.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
             println!("         ms/step by system: {}", parts.join(", "));
@@ -227,9 +238,23 @@ fn bench(args: &BenchArgs) -> Result<(), AppError> {
         rows.push(r);
     }
     if let Some(path) = &args.csv {
-        let mut csv = String::from("scene,actors,threads,steps,mean_ms_per_step,median_ms_per_step,ke_start,ke_end,escaped,peak_rss_mib\n");
+        let mut csv = String::from(
+            "scene,actors,threads,steps,mean_ms_per_step,median_ms_per_step,ke_start,ke_end,escaped,peak_rss_mib\n",
+        );
         for r in &rows {
-            csv += &format!("{},{},{},{},{},{},{},{},{},{}\n", r.scene, r.actors, r.threads, r.steps, r.mean_ms_per_step, r.median_ms_per_step, r.ke_start, r.ke_end, r.escaped, r.peak_rss_mib);
+            csv += &format!(
+                "{},{},{},{},{},{},{},{},{},{}\n",
+                r.scene,
+                r.actors,
+                r.threads,
+                r.steps,
+                r.mean_ms_per_step,
+                r.median_ms_per_step,
+                r.ke_start,
+                r.ke_end,
+                r.escaped,
+                r.peak_rss_mib
+            );
         }
         write_out(path, csv)?;
     }

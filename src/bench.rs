@@ -2,11 +2,11 @@
 //! schedule's steps, and reports per N as a table row or a JSON line.
 
 use crate::build::spawn_all;
+use crate::math::Vector;
 use crate::schedule::StepProfile;
 use crate::sim::Sim;
 use crate::spawners::{box_gas, box_gas_half_extent};
 use crate::step::Params;
-use crate::math::Vector;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Duration;
@@ -55,7 +55,13 @@ pub fn box_gas_sim(n: u32, seed: u64) -> Sim {
 
 /// Runs box-gas with `n` cubes: `warmup` untimed steps, then `steps` timed ones. Call it
 /// inside the rayon pool of the wanted thread count.
-pub fn run_box_gas(n: u32, steps: u64, warmup: u64, seed: u64, threads: usize) -> Result<BenchResult, crate::error::StepError> {
+pub fn run_box_gas(
+    n: u32,
+    steps: u64,
+    warmup: u64,
+    seed: u64,
+    threads: usize,
+) -> Result<BenchResult, crate::error::StepError> {
     let mut sim = box_gas_sim(n, seed);
     let ke_start = sim.totals().kinetic_energy;
     sim.run(warmup)?;
@@ -99,6 +105,8 @@ pub fn run_box_gas(n: u32, steps: u64, warmup: u64, seed: u64, threads: usize) -
 pub fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok()))
+        .and_then(|s| {
+            s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
         .map_or(0.0, |kib| kib / 1024.0)
 }

@@ -3,7 +3,7 @@
 //! and are plain data that threads can share (DESIGN.md §3).
 
 use crate::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
-use crate::math::{world_inverse_inertia, Mat3, Quat, Scalar, Vector};
+use crate::math::{Mat3, Quat, Scalar, Vector, world_inverse_inertia};
 use crate::mesh::MeshId;
 use hecs::{Entity, World};
 
@@ -24,6 +24,10 @@ pub struct Bodies {
     pub inv_mass: Vec<Scalar>,
     /// Body-frame inertia [kg·m²].
     pub inertia_body: Vec<Mat3>,
+    /// Principal moments [kg·m²].
+    pub principal_moments: Vec<Vector>,
+    /// Principal frame → body frame.
+    pub principal_axes: Vec<Quat>,
     /// Body-frame inverse inertia, zero for fixed actors.
     pub inv_inertia_body: Vec<Mat3>,
     /// World-frame inverse inertia R I⁻¹ Rᵀ at the snapshot's orientation (PHYSICS.md E9).
@@ -39,7 +43,8 @@ pub struct Bodies {
 }
 
 /// The components one row is read from.
-type Row<'a> = (Entity, &'a ActorIndex, &'a Pose, &'a Velocity, &'a MassProps, &'a Material, &'a BoundingSphere, &'a Mesh);
+type Row<'a> =
+    (Entity, &'a ActorIndex, &'a Pose, &'a Velocity, &'a MassProps, &'a Material, &'a BoundingSphere, &'a Mesh);
 
 impl Bodies {
     /// Number of rows.
@@ -75,6 +80,8 @@ impl Bodies {
             self.inv_mass[i] = mass.inv_mass;
             self.inertia_body[i] = mass.inertia;
             self.inv_inertia_body[i] = mass.inv_inertia;
+            self.principal_moments[i] = mass.principal_moments;
+            self.principal_axes[i] = mass.principal_axes;
             self.inv_inertia_world[i] = rotate_tensor(pose.orientation, mass.inv_inertia);
             self.radius[i] = sphere.radius;
             self.mesh[i] = mesh.id;
@@ -97,11 +104,8 @@ impl Bodies {
     /// The first row and field holding a NaN or infinity, if any (the NaN guard).
     #[must_use]
     pub fn first_non_finite(&self) -> Option<(usize, &'static str)> {
-        let vectors = [
-            ("position", &self.position),
-            ("velocity", &self.velocity),
-            ("angular_velocity", &self.angular_velocity),
-        ];
+        let vectors =
+            [("position", &self.position), ("velocity", &self.velocity), ("angular_velocity", &self.angular_velocity)];
         // Cheap pass first: a sum is finite iff every term is (a NaN or ∞ survives addition
         // unless ∞ − ∞, which is itself NaN); the search below runs only on failure.
         let total: Scalar = vectors.iter().flat_map(|(_, v)| v.iter()).map(|v| v.x + v.y + v.z).sum::<Scalar>()
@@ -127,6 +131,8 @@ impl Bodies {
         self.inv_mass.resize(n, 0.0);
         self.inertia_body.resize(n, Mat3::ZERO);
         self.inv_inertia_body.resize(n, Mat3::ZERO);
+        self.principal_moments.resize(n, Vector::ZERO);
+        self.principal_axes.resize(n, Quat::IDENTITY);
         self.inv_inertia_world.resize(n, Mat3::ZERO);
         self.radius.resize(n, 0.0);
         self.mesh.resize(n, MeshId(0));
@@ -144,9 +150,5 @@ pub fn rotate_tensor(orientation: Quat, m: Mat3) -> Mat3 {
     let isotropic = m.x_axis.x == m.y_axis.y
         && m.y_axis.y == m.z_axis.z
         && [m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.z, m.z_axis.x, m.z_axis.y].iter().all(|&x| x == 0.0);
-    if isotropic {
-        m
-    } else {
-        world_inverse_inertia(orientation, m)
-    }
+    if isotropic { m } else { world_inverse_inertia(orientation, m) }
 }

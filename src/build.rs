@@ -3,7 +3,7 @@
 
 use crate::error::SceneError;
 use crate::mesh::{ConvexMesh, MeshId};
-use crate::scene::{invalid, vector, MassSpec, SceneDef, ShapeDef};
+use crate::scene::{MassSpec, SceneDef, ShapeDef, invalid, vector};
 use crate::shapes;
 use crate::sim::{BodyDef, Sim};
 use crate::spawners::{Instance, MAX_ACTORS};
@@ -15,7 +15,12 @@ use std::path::Path;
 pub fn instances(scene: &SceneDef, path: &Path) -> Result<Vec<Instance>, SceneError> {
     let total = scene.actors.len() as u64 + scene.spawners.iter().map(crate::spawners::SpawnerDef::count).sum::<u64>();
     if total > MAX_ACTORS {
-        return Err(invalid(path, "scene", "spawners", format!("{total} actors is more than the limit of {MAX_ACTORS}")));
+        return Err(invalid(
+            path,
+            "scene",
+            "spawners",
+            format!("{total} actors is more than the limit of {MAX_ACTORS}"),
+        ));
     }
     let mut out: Vec<Instance> = scene
         .actors
@@ -38,7 +43,9 @@ pub fn instances(scene: &SceneDef, path: &Path) -> Result<Vec<Instance>, SceneEr
 /// Builds the simulation a scene describes; `path` locates OBJ files and names errors.
 pub fn build(scene: &SceneDef, path: &Path) -> Result<Sim, SceneError> {
     let schedule = match &scene.schedule {
-        Some(names) => crate::systems::schedule_of(names).map_err(|e| invalid(path, "scene", "schedule", e.to_string()))?,
+        Some(names) => {
+            crate::systems::schedule_of(names).map_err(|e| invalid(path, "scene", "schedule", e.to_string()))?
+        }
         None => crate::systems::default_schedule(),
     };
     let params = Params {
@@ -78,7 +85,12 @@ pub fn spawn_all(sim: &mut Sim, instances: &[Instance], path: &Path) -> Result<(
             MassSpec::Density(rho) => rho * volume,
         };
         if !(mass.is_finite() && mass > 0.0) {
-            return Err(invalid(path, &inst.name, "mass", format!("comes out as {mass} kg; give a positive mass or density")));
+            return Err(invalid(
+                path,
+                &inst.name,
+                "mass",
+                format!("comes out as {mass} kg; give a positive mass or density"),
+            ));
         }
         sim.spawn(&BodyDef {
             name: inst.name.clone(),

@@ -62,7 +62,17 @@ pub struct RunArgs {
 impl Default for RunArgs {
     /// The built-in demo with the scene's own settings: what `rigid` alone runs.
     fn default() -> Self {
-        Self { scene: None, steps: None, dt: None, out: None, trajectory: None, every: 1, quiet: false, threads: None, schedule: None }
+        Self {
+            scene: None,
+            steps: None,
+            dt: None,
+            out: None,
+            trajectory: None,
+            every: 1,
+            quiet: false,
+            threads: None,
+            schedule: None,
+        }
     }
 }
 

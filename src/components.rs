@@ -58,19 +58,25 @@ pub struct MassProps {
     pub inertia: Mat3,
     /// Its inverse, zero when fixed [1/(kg·m²)].
     pub inv_inertia: Mat3,
+    /// Principal moments [kg·m²] (PHYSICS.md §3.4), in the order of `principal_axes`' columns.
+    pub principal_moments: Vector,
+    /// Rotation P from the principal frame to the body frame: `inertia = P diag(moments) Pᵀ`.
+    pub principal_axes: Quat,
 }
 
 impl MassProps {
     /// Mass properties of a free body from its mass and body inertia.
     #[must_use]
     pub fn dynamic(mass: Scalar, inertia: Mat3) -> Self {
-        Self { mass, inv_mass: 1.0 / mass, inertia, inv_inertia: inertia.inverse() }
+        Self { inv_mass: 1.0 / mass, inv_inertia: inertia.inverse(), ..Self::fixed(mass, inertia) }
     }
 
     /// A fixed body: infinite effective mass, but the nominal values are kept for output.
     #[must_use]
     pub fn fixed(mass: Scalar, inertia: Mat3) -> Self {
-        Self { mass, inv_mass: 0.0, inertia, inv_inertia: Mat3::ZERO }
+        let (principal_moments, axes) = crate::mass::principal_axes(inertia);
+        let principal_axes = Quat::from_mat3(&axes).normalize();
+        Self { mass, inv_mass: 0.0, inertia, inv_inertia: Mat3::ZERO, principal_moments, principal_axes }
     }
 
     /// True for fixed actors.

@@ -13,7 +13,9 @@ pub enum MeshError {
         reason: String,
     },
     /// Too few vertices or triangles to enclose a volume.
-    #[error("mesh is empty or too small: {vertices} vertices, {triangles} triangles (a closed solid needs at least 4 of each)")]
+    #[error(
+        "mesh is empty or too small: {vertices} vertices, {triangles} triangles (a closed solid needs at least 4 of each)"
+    )]
     Empty {
         /// Vertex count.
         vertices: usize,
@@ -41,7 +43,9 @@ pub enum MeshError {
         triangle: usize,
     },
     /// An edge is not shared by exactly two triangles.
-    #[error("mesh is not closed: edge ({a}, {b}) is used by {triangles} triangle(s), a closed mesh uses every edge exactly twice")]
+    #[error(
+        "mesh is not closed: edge ({a}, {b}) is used by {triangles} triangle(s), a closed mesh uses every edge exactly twice"
+    )]
     Open {
         /// First vertex of the edge.
         a: u32,

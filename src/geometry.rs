@@ -3,7 +3,7 @@
 
 use crate::components::Pose;
 use crate::math::{Scalar, Vector};
-use crate::mesh::{max_distance, ConvexMesh, Plane};
+use crate::mesh::{ConvexMesh, Plane, max_distance};
 use std::sync::Arc;
 
 /// Inside tolerance relative to the body's radius: points this far outside a face still count

@@ -31,6 +31,9 @@
 //! ```
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
+// Scene errors carry the file's text for miette's snippet; they are built once, on the way out
+// of a failed command, so their size costs nothing where it matters.
+#![allow(clippy::result_large_err)]
 
 pub mod app;
 pub mod bench;

@@ -2,7 +2,7 @@
 //! codes of CONTRACTS.md §3 (0 success, 2 bad input, 1 any other failure).
 
 use clap::Parser;
-use rigid_sandbox::app::{execute, AppError};
+use rigid_sandbox::app::{AppError, execute};
 use rigid_sandbox::cli::{Command, RunArgs};
 use rigid_sandbox::error::SceneError;
 use std::io::IsTerminal;
@@ -13,10 +13,10 @@ fn main() {
         let code = e.exit_code();
         eprintln!("error: {e}");
         // On a terminal, also show the offending line of a RON error (miette's snippet).
-        if let AppError::Scene(parse @ SceneError::Parse { .. }) = e {
-            if std::io::stderr().is_terminal() {
-                eprintln!("{:?}", miette::Report::new(parse));
-            }
+        if let AppError::Scene(parse @ SceneError::Parse { .. }) = e
+            && std::io::stderr().is_terminal()
+        {
+            eprintln!("{:?}", miette::Report::new(parse));
         }
         std::process::exit(code);
     }

@@ -56,6 +56,46 @@ pub fn outer(a: Vector, b: Vector) -> Mat3 {
     Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
+/// Principal axes of a symmetric tensor (PHYSICS.md §3.4), by cyclic Jacobi rotations:
+/// returns the moments and the rotation P (det +1) with `I = P diag(moments) Pᵀ`. Its columns
+/// are the principal axes in the body frame.
+#[must_use]
+pub fn principal_axes(inertia: Mat3) -> (Vector, Mat3) {
+    let mut a = inertia;
+    let mut v = Mat3::IDENTITY;
+    let at = |m: &Mat3, r: usize, c: usize| m.col(c)[r];
+    for _sweep in 0..32 {
+        let off = at(&a, 0, 1).abs() + at(&a, 0, 2).abs() + at(&a, 1, 2).abs();
+        let diag = at(&a, 0, 0).abs() + at(&a, 1, 1).abs() + at(&a, 2, 2).abs();
+        if off <= 1e-16 * diag {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            let apq = at(&a, p, q);
+            if apq == 0.0 {
+                continue;
+            }
+            // The plane rotation that zeroes a_pq (Numerical Recipes §11.1): A ← JᵀAJ, V ← VJ.
+            let theta = (at(&a, q, q) - at(&a, p, p)) / (2.0 * apq);
+            let t = if theta == 0.0 { 1.0 } else { theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt()) };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            let mut j = Mat3::IDENTITY;
+            j.col_mut(p)[p] = c;
+            j.col_mut(q)[q] = c;
+            j.col_mut(q)[p] = s;
+            j.col_mut(p)[q] = -s;
+            a = j.transpose() * a * j;
+            v *= j;
+        }
+    }
+    let moments = Vector::new(at(&a, 0, 0), at(&a, 1, 1), at(&a, 2, 2));
+    if v.determinant() < 0.0 {
+        v.z_axis = -v.z_axis;
+    }
+    (moments, v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -81,18 +121,43 @@ mod tests {
     #[test]
     fn unit_cube_with_split_top_keeps_its_centroid() {
         // E7: nine vertices (extra one in the top face centre); the vertex average is at z = 5/9.
-        let mut v: Vec<Vector> = (0..8)
-            .map(|k| Vector::new((k >> 2 & 1) as f64, (k >> 1 & 1) as f64, (k & 1) as f64))
-            .collect();
+        let mut v: Vec<Vector> =
+            (0..8).map(|k| Vector::new((k >> 2 & 1) as f64, (k >> 1 & 1) as f64, (k & 1) as f64)).collect();
         v.push(Vector::new(0.5, 0.5, 1.0)); // 8: top (z = 1) centre
         // Canonical cube triangles (PHYSICS.md §0) with the +z face replaced by a fan of four.
         let t = [
-            [4, 6, 7], [4, 7, 5], [0, 1, 3], [0, 3, 2], [2, 3, 7], [2, 7, 6], [0, 4, 5], [0, 5, 1],
-            [1, 5, 8], [5, 7, 8], [7, 3, 8], [3, 1, 8], [0, 2, 6], [0, 6, 4],
+            [4, 6, 7],
+            [4, 7, 5],
+            [0, 1, 3],
+            [0, 3, 2],
+            [2, 3, 7],
+            [2, 7, 6],
+            [0, 4, 5],
+            [0, 5, 1],
+            [1, 5, 8],
+            [5, 7, 8],
+            [7, 3, 8],
+            [3, 1, 8],
+            [0, 2, 6],
+            [0, 6, 4],
         ];
         let p = volume_props(&v, &t);
         assert!((p.volume - 1.0).abs() < 1e-14);
         assert!((p.centroid - Vector::splat(0.5)).length() < 1e-14, "{:?}", p.centroid);
         assert!(close(p.inertia, Mat3::from_diagonal(Vector::splat(1.0 / 6.0)), 1e-14));
+    }
+
+    #[test]
+    fn corner_tetrahedron_principal_moments_are_0_1_and_0_0625() {
+        // PHYSICS.md §3.2, m = 1 (ρ = 6): moments 0.1 about (1,1,1) and 0.0625 twice.
+        let v = [Vector::ZERO, Vector::X, Vector::Y, Vector::Z];
+        let p = volume_props(&v, &[[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]);
+        let (moments, axes) = principal_axes(p.inertia * 6.0);
+        let mut m = moments.to_array();
+        m.sort_by(f64::total_cmp);
+        assert!((m[0] - 0.0625).abs() < 1e-14 && (m[1] - 0.0625).abs() < 1e-14 && (m[2] - 0.1).abs() < 1e-14, "{m:?}");
+        let rebuilt = axes * Mat3::from_diagonal(moments) * axes.transpose();
+        assert!(close(rebuilt, p.inertia * 6.0, 1e-15));
+        assert!((axes.determinant() - 1.0).abs() < 1e-14);
     }
 }

@@ -6,7 +6,7 @@
 //! such as a box face's two halves, share one plane: same answers, half the work).
 
 use crate::error::MeshError;
-use crate::mass::{volume_props, VolumeProps};
+use crate::mass::{VolumeProps, volume_props};
 use crate::math::{Mat3, Scalar, Vector};
 use std::collections::{HashMap, VecDeque};
 
@@ -169,7 +169,10 @@ impl MeshTable {
 }
 
 fn extent(vertices: &[Vector]) -> Scalar {
-    let (lo, hi) = vertices.iter().fold((Vector::splat(Scalar::INFINITY), Vector::splat(Scalar::NEG_INFINITY)), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let (lo, hi) =
+        vertices.iter().fold((Vector::splat(Scalar::INFINITY), Vector::splat(Scalar::NEG_INFINITY)), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
     (hi - lo).max_element()
 }
 

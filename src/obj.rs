@@ -23,7 +23,7 @@ pub fn load_obj(path: &Path, scale: Scalar) -> Result<RawMesh, String> {
     for model in &models {
         let m = &model.mesh;
         let base = u32::try_from(vertices.len()).map_err(|_| "too many vertices".to_string())?;
-        vertices.extend(m.positions.chunks_exact(3).map(|p| Vector::new(p[0].into(), p[1].into(), p[2].into()) * scale));
+        vertices.extend(m.positions.chunks_exact(3).map(|p| Vector::new(p[0], p[1], p[2]) * scale));
         if vertices.len() > MAX_OBJ_VERTICES {
             return Err(format!("more than {MAX_OBJ_VERTICES} vertices"));
         }

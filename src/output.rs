@@ -3,7 +3,7 @@
 //! failed run never leaves a half-written file.
 
 use crate::contact::Feature;
-use crate::sim::{totals, ActorState, Sim};
+use crate::sim::{ActorState, Sim, totals};
 use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
@@ -74,7 +74,14 @@ pub fn state_hash(actors: &[ActorState]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let q = |a: &ActorState| a.pose.orientation.to_array();
     for a in actors {
-        let values = a.pose.position.to_array().into_iter().chain(q(a)).chain(a.velocity.linear.to_array()).chain(a.velocity.angular.to_array());
+        let values = a
+            .pose
+            .position
+            .to_array()
+            .into_iter()
+            .chain(q(a))
+            .chain(a.velocity.linear.to_array())
+            .chain(a.velocity.angular.to_array());
         for v in values {
             for byte in v.to_bits().to_le_bytes() {
                 h = (h ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
@@ -95,7 +102,19 @@ pub fn trajectory_rows(out: &mut impl Write, step: u64, time: f64, actors: &[Act
             out,
             "{step},{time},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             csv_field(&a.name),
-            p.x, p.y, p.z, q.x, q.y, q.z, q.w, v.x, v.y, v.z, w.x, w.y, w.z
+            p.x,
+            p.y,
+            p.z,
+            q.x,
+            q.y,
+            q.z,
+            q.w,
+            v.x,
+            v.y,
+            v.z,
+            w.x,
+            w.y,
+            w.z
         )?;
     }
     Ok(())

@@ -130,16 +130,25 @@ impl ShapeDef {
     /// Checks sizes and counts; `Err((field, reason))`.
     fn check(&self) -> Result<(), (String, String)> {
         let positive = |field: &str, v: Scalar| {
-            if v.is_finite() && v > 0.0 { Ok(()) } else { Err((format!("shape.{field}"), format!("must be a finite number > 0 m, got {v}"))) }
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err((format!("shape.{field}"), format!("must be a finite number > 0 m, got {v}")))
+            }
         };
         match self {
-            Self::Box { size: (x, y, z) } => [("size.x", *x), ("size.y", *y), ("size.z", *z)].iter().try_for_each(|(f, v)| positive(f, *v)),
+            Self::Box { size: (x, y, z) } => {
+                [("size.x", *x), ("size.y", *y), ("size.z", *z)].iter().try_for_each(|(f, v)| positive(f, *v))
+            }
             Self::Tetrahedron { edge } => positive("edge", *edge),
             Self::Octahedron { radius } => positive("radius", *radius),
             Self::Icosphere { radius, subdivisions } => {
                 positive("radius", *radius)?;
                 if *subdivisions > crate::shapes::MAX_SUBDIVISIONS {
-                    return Err(("shape.subdivisions".into(), format!("must be 0..={}, got {subdivisions}", crate::shapes::MAX_SUBDIVISIONS)));
+                    return Err((
+                        "shape.subdivisions".into(),
+                        format!("must be 0..={}, got {subdivisions}", crate::shapes::MAX_SUBDIVISIONS),
+                    ));
                 }
                 Ok(())
             }
@@ -148,7 +157,10 @@ impl ShapeDef {
                 positive("height", *height)?;
                 if !crate::shapes::SEGMENTS_RANGE.contains(segments) {
                     let r = crate::shapes::SEGMENTS_RANGE;
-                    return Err(("shape.segments".into(), format!("must be {}..={}, got {segments}", r.start(), r.end())));
+                    return Err((
+                        "shape.segments".into(),
+                        format!("must be {}..={}, got {segments}", r.start(), r.end()),
+                    ));
                 }
                 Ok(())
             }
@@ -243,7 +255,11 @@ impl TryFrom<RawActor> for ActorDef {
         };
         let v3 = |field: &str, v: Option<V3>| -> Result<Vector, String> {
             let v = vector(v.unwrap_or_default());
-            if crate::math::is_finite_vector(v) { Ok(v) } else { Err(fail((field.into(), format!("must be finite, got {v}")))) }
+            if crate::math::is_finite_vector(v) {
+                Ok(v)
+            } else {
+                Err(fail((field.into(), format!("must be finite, got {v}"))))
+            }
         };
         let restitution = raw.restitution.unwrap_or(DEFAULT_RESTITUTION);
         if !(0.0..=1.0).contains(&restitution) {
@@ -272,7 +288,11 @@ impl TryFrom<RawActor> for ActorDef {
 }
 
 fn positive(field: &str, v: Scalar, unit: &str) -> Result<Scalar, (String, String)> {
-    if v.is_finite() && v > 0.0 { Ok(v) } else { Err((field.into(), format!("must be a finite number > 0 {unit}, got {v}"))) }
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err((field.into(), format!("must be a finite number > 0 {unit}, got {v}")))
+    }
 }
 
 /// The RON options of every scene: bare optionals (`mass: 1.0`, CONTRACTS.md §2) and a

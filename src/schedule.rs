@@ -103,9 +103,8 @@ impl Schedule {
             (system.run)(world, ctx);
             profile.systems.push((system.name, start.elapsed()));
             if let Some((row, field)) = ctx.bodies.first_non_finite() {
-                let actor = world
-                    .get::<&Name>(ctx.bodies.entity[row])
-                    .map_or_else(|_| format!("#{row}"), |n| n.0.clone());
+                let actor =
+                    world.get::<&Name>(ctx.bodies.entity[row]).map_or_else(|_| format!("#{row}"), |n| n.0.clone());
                 return Err(StepError { step: ctx.step, system: system.name.to_string(), actor, field });
             }
         }

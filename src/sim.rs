@@ -64,7 +64,16 @@ impl Sim {
     #[must_use]
     pub fn new(dt: Scalar, params: Params, schedule: Schedule) -> Self {
         let ctx = StepContext { dt, params, ..StepContext::default() };
-        Self { world: World::new(), ctx, schedule, time: 0.0, steps: 0, contacts: [0; 3], profile: StepProfile::default(), names: Vec::new() }
+        Self {
+            world: World::new(),
+            ctx,
+            schedule,
+            time: 0.0,
+            steps: 0,
+            contacts: [0; 3],
+            profile: StepProfile::default(),
+            names: Vec::new(),
+        }
     }
 
     /// Adds a mesh to the table (an identical one is shared) and returns its id.

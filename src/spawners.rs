@@ -3,9 +3,9 @@
 //! here, and serves the `BoxGas` spawner, `rigid bench`, the benches and the tests.
 
 use crate::components::{Material, Pose, Velocity};
-use crate::math::{from_euler_degrees, Quat, Scalar, Vector};
+use crate::math::{Quat, Scalar, Vector, from_euler_degrees};
 use crate::rng::SplitMix64;
-use crate::scene::{vector, ActorDef, MassSpec, ShapeDef, V3};
+use crate::scene::{ActorDef, MassSpec, ShapeDef, V3, vector};
 use serde::Deserialize;
 
 /// Most actors a scene may hold after expansion: a clear limit instead of running out of
@@ -112,7 +112,11 @@ impl SpawnerDef {
     /// Checks the parameters; `Err((field, reason))`.
     pub fn check(&self) -> Result<(), (String, String)> {
         let finite_nonneg = |field: &str, v: Scalar| {
-            if v.is_finite() && v >= 0.0 { Ok(()) } else { Err((field.to_string(), format!("must be a finite number >= 0, got {v}"))) }
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err((field.to_string(), format!("must be a finite number >= 0, got {v}")))
+            }
         };
         match self {
             Self::Grid { spacing, .. } => {
@@ -152,12 +156,23 @@ impl SpawnerDef {
             }
             Self::Random { actor, count, seed, spacing, jitter, speed, spin } => {
                 let name = actor.name.as_deref().unwrap_or(prefix);
-                let lattice = Lattice { count: *count, seed: *seed, spacing: *spacing, jitter: *jitter, speed: *speed, spin: *spin };
+                let lattice = Lattice {
+                    count: *count,
+                    seed: *seed,
+                    spacing: *spacing,
+                    jitter: *jitter,
+                    speed: *speed,
+                    spin: *spin,
+                };
                 lattice
                     .place(actor.position)
                     .into_iter()
                     .enumerate()
-                    .map(|(i, (pose, velocity))| Instance { pose, velocity, ..Instance::from_def(actor, format!("{name}-{i}")) })
+                    .map(|(i, (pose, velocity))| Instance {
+                        pose,
+                        velocity,
+                        ..Instance::from_def(actor, format!("{name}-{i}"))
+                    })
                     .collect()
             }
             Self::BoxGas { actors, seed } => box_gas(*actors, *seed),
@@ -279,7 +294,9 @@ mod tests {
         let close = |a: Vector, b: [f64; 3]| (a - Vector::from_array(b)).abs().max_element() < 1e-6;
         assert!(close(c0.pose.position, [-8.986688, -8.950844, -8.905800]), "{}", c0.pose.position);
         let q = c0.pose.orientation;
-        assert!((Vector::new(q.x, q.y, q.z) - Vector::new(0.2557372, -0.7001709, -0.6644162)).abs().max_element() < 5e-8);
+        assert!(
+            (Vector::new(q.x, q.y, q.z) - Vector::new(0.2557372, -0.7001709, -0.6644162)).abs().max_element() < 5e-8
+        );
         assert!((q.w - 0.0539477).abs() < 5e-8);
         assert!(close(c0.velocity.linear, [1.5093948, 0.0922687, -0.8579653]));
         assert!(close(c0.velocity.angular, [0.5879932, -0.1917157, 0.2108407]));

@@ -30,7 +30,13 @@ pub struct Params {
 
 impl Default for Params {
     fn default() -> Self {
-        Self { gravity: Vector::new(0.0, -9.81, 0.0), max_sweeps: 20, correction: 0.4, slop: 0.005, max_correction: 0.2 }
+        Self {
+            gravity: Vector::new(0.0, -9.81, 0.0),
+            max_sweeps: 20,
+            correction: 0.4,
+            slop: 0.005,
+            max_correction: 0.2,
+        }
     }
 }
 

@@ -26,7 +26,9 @@ pub fn cull_all_pairs(_world: &mut World, ctx: &mut StepContext) {
     let b = &ctx.bodies;
     for i in 0..b.len() {
         for j in i + 1..b.len() {
-            if !(b.is_fixed(i) && b.is_fixed(j)) && spheres_overlap(b.position[i], b.radius[i], b.position[j], b.radius[j]) {
+            if !(b.is_fixed(i) && b.is_fixed(j))
+                && spheres_overlap(b.position[i], b.radius[i], b.position[j], b.radius[j])
+            {
                 ctx.pairs.push(Pair::candidate(i as u32, j as u32));
             }
         }
@@ -101,7 +103,8 @@ struct Grid {
 impl Grid {
     fn build(b: &crate::bodies::Bodies, threshold: Scalar, s: &mut CullScratch) -> Self {
         let ordinary = || (0..b.len()).filter(|&i| b.radius[i] <= threshold);
-        let (mut lo, mut hi, mut r_max) = (Vector::splat(Scalar::INFINITY), Vector::splat(Scalar::NEG_INFINITY), 0.0_f64);
+        let (mut lo, mut hi, mut r_max) =
+            (Vector::splat(Scalar::INFINITY), Vector::splat(Scalar::NEG_INFINITY), 0.0_f64);
         let mut count = 0;
         for i in ordinary() {
             lo = lo.min(b.position[i]);
@@ -155,7 +158,14 @@ impl Grid {
     }
 
     /// Appends the candidates (i, j > i) of body i, unsorted.
-    fn pairs_of(&self, i: usize, b: &crate::bodies::Bodies, (start, order, _): (&Vec<u32>, &Vec<u32>, &Vec<u32>), large: &[u32], out: &mut Vec<Pair>) {
+    fn pairs_of(
+        &self,
+        i: usize,
+        b: &crate::bodies::Bodies,
+        (start, order, _): (&Vec<u32>, &Vec<u32>, &Vec<u32>),
+        large: &[u32],
+        out: &mut Vec<Pair>,
+    ) {
         let (xi, ri) = (b.position[i], b.radius[i]);
         let test = |j: usize, out: &mut Vec<Pair>| {
             if j > i && !(b.is_fixed(i) && b.is_fixed(j)) && spheres_overlap(xi, ri, b.position[j], b.radius[j]) {

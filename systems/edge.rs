@@ -2,7 +2,7 @@
 //! (PHYSICS.md §1.5, erratum E4).
 
 use crate::contact::{Contact, Feature};
-use crate::geometry::{clip_segment, depth_along, Posed};
+use crate::geometry::{Posed, clip_segment, depth_along};
 use crate::math::Scalar;
 use crate::step::StepContext;
 use hecs::World;
@@ -56,7 +56,7 @@ pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
 mod tests {
     use super::*;
     use crate::components::Pose;
-    use crate::math::{from_euler_degrees, Vector};
+    use crate::math::{Vector, from_euler_degrees};
     use crate::mesh::ConvexMesh;
     use std::sync::Arc;
 

@@ -2,7 +2,7 @@
 //! (PHYSICS.md §1.3, errata E2 and E3).
 
 use crate::contact::{Contact, Feature, PairState};
-use crate::geometry::{depth_along, is_inside, Posed};
+use crate::geometry::{Posed, depth_along, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::step::StepContext;
 use hecs::World;

@@ -27,7 +27,7 @@ pub use edge::{edge, edge_contact};
 pub use face::{face, face_contact};
 pub use integrate::{integrate, rotate_free};
 pub use prune::{prune, separated};
-pub use resolve::{collision_impulse, resolve, BodyState};
+pub use resolve::{BodyState, collision_impulse, resolve};
 pub use vertex::{vertex, vertex_contact};
 
 use crate::error::ScheduleError;

@@ -142,7 +142,8 @@ mod tests {
     fn separating_bodies_get_no_impulse() {
         let a = body(Vector::new(-0.99, 0.0, 0.0), -Vector::X, 1.0, Mat3::IDENTITY * 6.0);
         let b = body(Vector::ZERO, Vector::ZERO, 1.0, Mat3::IDENTITY * 6.0);
-        let c = Contact { point: Vector::new(-0.49, 0.0, 0.0), normal: -Vector::X, depth: 0.01, feature: Feature::Face };
+        let c =
+            Contact { point: Vector::new(-0.49, 0.0, 0.0), normal: -Vector::X, depth: 0.01, feature: Feature::Face };
         assert_eq!(collision_impulse(&a, &b, &c, 1.0), None);
     }
 }

@@ -2,7 +2,7 @@
 //! (PHYSICS.md §1.4, erratum E5).
 
 use crate::contact::{Contact, Feature};
-use crate::geometry::{depth_along, Posed};
+use crate::geometry::{Posed, depth_along};
 use crate::math::{Scalar, Vector};
 use crate::step::StepContext;
 use hecs::World;
@@ -40,7 +40,12 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
         return None;
     }
     let normal = b.planes[deepest.1].normal;
-    Some(Contact { point: sum / Scalar::from(count), normal, depth: depth_along(a, b, normal), feature: Feature::Vertex })
+    Some(Contact {
+        point: sum / Scalar::from(count),
+        normal,
+        depth: depth_along(a, b, normal),
+        feature: Feature::Vertex,
+    })
 }
 
 #[cfg(test)]
