@@ -105,7 +105,17 @@ fn mass_properties_of_every_shape_come_out_exact() {
 fn trajectory_has_the_header_and_every_kth_step() {
     let dir = tempfile::tempdir().expect("temp dir");
     let csv = dir.path().join("t.csv");
-    let o = rigid(&["run", &scene("newtons-cradle.ron"), "--steps", "10", "--every", "5", "--trajectory", csv.to_str().expect("utf-8"), "--quiet"]);
+    let o = rigid(&[
+        "run",
+        &scene("newtons-cradle.ron"),
+        "--steps",
+        "10",
+        "--every",
+        "5",
+        "--trajectory",
+        csv.to_str().expect("utf-8"),
+        "--quiet",
+    ]);
     assert!(o.status.success(), "{}", text(&o).1);
     let body = std::fs::read_to_string(&csv).expect("written");
     let lines: Vec<&str> = body.lines().collect();
@@ -121,8 +131,16 @@ fn bad_input_exits_2_with_file_line_and_column() {
     let cases = [
         ("syntax.ron", "Scene(\n  actors: [\n    Actor(shape: Box(size: (1.0, 1.0, 1.0)),,\n  ],\n)", ":3:"),
         ("field.ron", "Scene(\n  actors: [\n    Actor(shape: Box(size: (1.0, 1.0, 1.0)), mas: 2.0),\n  ],\n)", "mas"),
-        ("mass.ron", "Scene(actors: [Actor(name: \"left\", shape: Box(size: (1.0, 1.0, 1.0)), mass: -2.0)])", "actor 'left': mass"),
-        ("both.ron", "Scene(actors: [Actor(name: \"x\", shape: Box(size: (1.0, 1.0, 1.0)), mass: 1.0, density: 2.0)])", "not both"),
+        (
+            "mass.ron",
+            "Scene(actors: [Actor(name: \"left\", shape: Box(size: (1.0, 1.0, 1.0)), mass: -2.0)])",
+            "actor 'left': mass",
+        ),
+        (
+            "both.ron",
+            "Scene(actors: [Actor(name: \"x\", shape: Box(size: (1.0, 1.0, 1.0)), mass: 1.0, density: 2.0)])",
+            "not both",
+        ),
         ("system.ron", "Scene(schedule: [\"cull\", \"fcae\"], actors: [])", "unknown system 'fcae'"),
     ];
     for (name, contents, needle) in cases {

@@ -3,7 +3,7 @@
 mod common;
 use common::*;
 use rigid_sandbox::math::Vector;
-use rigid_sandbox::scene::{self, MassSpec, DEFAULT_RESTITUTION};
+use rigid_sandbox::scene::{self, DEFAULT_RESTITUTION, MassSpec};
 
 #[test]
 fn every_shipped_scene_runs_with_finite_state() {
@@ -30,12 +30,16 @@ fn every_shipped_scene_runs_with_finite_state() {
 
 #[test]
 fn defaults_are_the_documented_ones() {
-    let def = scene::parse("Scene(actors: [Actor(shape: Box(size: (1.0, 2.0, 3.0)))])", "t.ron".as_ref()).expect("parses");
+    let def =
+        scene::parse("Scene(actors: [Actor(shape: Box(size: (1.0, 2.0, 3.0)))])", "t.ron".as_ref()).expect("parses");
     assert_eq!((def.dt, def.steps, def.gravity), (1.0 / 60.0, 600, (0.0, -9.81, 0.0)));
     assert!(def.spawners.is_empty() && def.schedule.is_none());
     let a = &def.actors[0];
     assert_eq!(a.mass, MassSpec::Density(1.0));
-    assert_eq!((a.position, a.rotation, a.velocity, a.angular_velocity), (Vector::ZERO, Vector::ZERO, Vector::ZERO, Vector::ZERO));
+    assert_eq!(
+        (a.position, a.rotation, a.velocity, a.angular_velocity),
+        (Vector::ZERO, Vector::ZERO, Vector::ZERO, Vector::ZERO)
+    );
     assert_eq!((a.restitution, a.friction, a.fixed, a.name.clone()), (DEFAULT_RESTITUTION, 0.0, false, None));
     // Density 1 and a 1×2×3 box: mass 6; the default name is actor-<index>.
     let sim = rigid_sandbox::build::build(&def, "t.ron".as_ref()).expect("builds");

@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use rigid_sandbox::error::ScheduleError;
-use rigid_sandbox::{systems, PairState, StepContext, System};
+use rigid_sandbox::{PairState, StepContext, System, systems};
 
 /// A user system: records, into `ctx.stats.found`'s face slot, how many candidates it saw, and
 /// proves it ran after `cull` and before `face` (no pair is `Found` yet).
