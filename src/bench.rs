@@ -39,6 +39,10 @@ pub struct BenchResult {
     /// Peak resident memory of the process so far [MiB] (runs go in ascending N, so each
     /// row's value is its own peak as long as N only grows).
     pub peak_rss_mib: f64,
+    /// Mean candidate pairs per timed step (broad-phase output).
+    pub candidates_per_step: f64,
+    /// Mean contacts found per timed step (narrow-phase output).
+    pub contacts_per_step: f64,
     /// Mean time per step of each part of the step, by system name [ms].
     pub systems_ms: BTreeMap<String, f64>,
 }
@@ -67,8 +71,11 @@ pub fn run_box_gas(
     sim.run(warmup)?;
     let mut per_step = Vec::with_capacity(steps as usize);
     let mut parts: BTreeMap<String, Duration> = BTreeMap::new();
+    let (mut candidates, mut contacts) = (0_usize, 0_u64);
     for _ in 0..steps {
         sim.step()?;
+        candidates += sim.ctx.stats.candidates;
+        contacts += sim.ctx.stats.found.iter().sum::<u64>();
         let p: &StepProfile = &sim.profile;
         per_step.push(p.snapshot + p.systems.iter().map(|s| s.1).sum::<Duration>());
         *parts.entry("snapshot".into()).or_default() += p.snapshot;
@@ -96,6 +103,8 @@ pub fn run_box_gas(
         ke_end: crate::sim::totals(&actors).kinetic_energy,
         escaped,
         peak_rss_mib: peak_rss_mib(),
+        candidates_per_step: candidates as f64 / steps.max(1) as f64,
+        contacts_per_step: contacts as f64 / steps.max(1) as f64,
         systems_ms: parts.into_iter().map(|(k, d)| (k, ms(d) / steps.max(1) as f64)).collect(),
     })
 }

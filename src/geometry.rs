@@ -22,13 +22,18 @@ pub struct Posed {
     pub vertices: Vec<Vector>,
     /// World face planes, in the mesh's order.
     pub planes: Vec<Plane>,
+    /// World feature-edge directions, in the mesh's order.
+    pub edge_directions: Vec<Vector>,
+    /// World axis-aligned bounds of the vertices, (min, max) [m].
+    pub bounds: (Vector, Vector),
 }
 
 impl Posed {
     /// Poses `mesh` at `pose`.
     #[must_use]
     pub fn new(mesh: Arc<ConvexMesh>, pose: &Pose) -> Self {
-        let mut posed = Self { mesh, position: Vector::ZERO, vertices: Vec::new(), planes: Vec::new() };
+        let mut posed =
+            Self { mesh, position: Vector::ZERO, vertices: Vec::new(), planes: Vec::new(), edge_directions: Vec::new(), bounds: (Vector::ZERO, Vector::ZERO) };
         posed.update(pose);
         posed
     }
@@ -40,11 +45,14 @@ impl Posed {
         self.position = x;
         self.vertices.clear();
         self.vertices.extend(self.mesh.vertices.iter().map(|&v| x + r * v));
+        self.bounds = self.vertices.iter().fold((Vector::INFINITY, Vector::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         self.planes.clear();
         self.planes.extend(self.mesh.planes.iter().map(|p| {
             let normal = r * p.normal;
             Plane { normal, offset: p.offset + normal.dot(x) }
         }));
+        self.edge_directions.clear();
+        self.edge_directions.extend(self.mesh.edge_directions.iter().map(|&d| r * d));
     }
 
     /// The inside tolerance for this body [m].

@@ -43,6 +43,9 @@ pub struct ConvexMesh {
     pub edges: Vec<[u32; 2]>,
     /// Distinct face planes, in order of first triangle.
     pub planes: Vec<Plane>,
+    /// Directions of the feature edges (between non-coplanar faces), each once up to sign:
+    /// the edge axes of a separating-axis test (a box has 3).
+    pub edge_directions: Vec<Vector>,
     /// Bounding-sphere radius about the centre of mass, `max |p|` [m] (PHYSICS.md §1.2).
     pub radius: Scalar,
     /// Smallest width over the face normals [m]: the thickness that bounds safe speeds (§5).
@@ -83,11 +86,13 @@ impl ConvexMesh {
             .map(|p| vertices.iter().map(|&v| p.offset - p.normal.dot(v)).fold(0.0, Scalar::max))
             .fold(Scalar::INFINITY, Scalar::min);
         let edges = unique_edges(&triangles);
+        let edge_directions = feature_edge_directions(&vertices, &triangles);
         let mesh = Self {
             vertices,
             triangles,
             edges,
             planes,
+            edge_directions,
             radius,
             thickness,
             volume: props.volume,
@@ -267,6 +272,36 @@ fn check_convex(vertices: &[Vector], planes: &[Plane], size: Scalar) -> Result<(
     Ok(())
 }
 
+/// Unit directions of the edges whose two triangles are not coplanar, deduplicated up to sign
+/// (a box's face diagonals are not feature edges: its 18 edges give 3 directions).
+fn feature_edge_directions(vertices: &[Vector], triangles: &[[u32; 3]]) -> Vec<Vector> {
+    let normal = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|i| vertices[i as usize]);
+        (b - a).cross(c - a).try_normalize()
+    };
+    let mut by_edge: HashMap<(u32, u32), Vec<Option<Vector>>> = HashMap::new();
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+            by_edge.entry((a, b)).or_default().push(normal(t));
+        }
+    }
+    let mut keys: Vec<_> = by_edge.keys().copied().collect();
+    keys.sort_unstable();
+    let mut dirs: Vec<Vector> = Vec::new();
+    for (a, b) in keys {
+        let coplanar = match by_edge[&(a, b)][..] {
+            [Some(n1), Some(n2)] => (n1 - n2).length() <= PLANE_MERGE_TOLERANCE,
+            _ => false,
+        };
+        let Some(d) = (vertices[b as usize] - vertices[a as usize]).try_normalize() else { continue };
+        if !coplanar && !dirs.iter().any(|e| e.cross(d).length() <= PLANE_MERGE_TOLERANCE) {
+            dirs.push(d);
+        }
+    }
+    dirs
+}
+
 fn unique_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
     let mut edges: Vec<[u32; 2]> = triangles
         .iter()
@@ -287,6 +322,7 @@ mod tests {
         let (v, t) = box_raw(Vector::ONE);
         let (m, c) = ConvexMesh::new(v, t).expect("valid box");
         assert_eq!((m.vertices.len(), m.triangles.len(), m.edges.len(), m.planes.len()), (8, 12, 18, 6));
+        assert_eq!(m.edge_directions.len(), 3);
         assert_eq!(c, Vector::ZERO);
         assert!((m.radius - 3f64.sqrt() / 2.0).abs() < 1e-15);
         assert!((m.thickness - 1.0).abs() < 1e-15);
