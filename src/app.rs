@@ -258,5 +258,11 @@ fn bench(args: &BenchArgs) -> Result<(), AppError> {
         }
         write_out(path, csv)?;
     }
+    if let Some(path) = &args.plot {
+        let tmp = crate::output::temp_path(path);
+        crate::plot::plot_svg(&tmp, &rows)
+            .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()))
+            .map_err(|reason| write_error(path, std::io::Error::other(reason)))?;
+    }
     Ok(())
 }

@@ -103,6 +103,9 @@ pub struct BenchArgs {
     /// Also write the results as CSV to FILE.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
+    /// Also draw time per step against actor count (log–log, a line per system) as SVG.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Most steps one command may ask for: a typo should not start a run of centuries.

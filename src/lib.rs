@@ -49,6 +49,7 @@ pub mod math;
 pub mod mesh;
 pub mod obj;
 pub mod output;
+pub mod plot;
 pub mod rng;
 pub mod scene;
 pub mod schedule;

@@ -153,7 +153,10 @@ impl Sim {
     /// Momentum, angular momentum about the origin, and kinetic energy of the free actors.
     #[must_use]
     pub fn totals(&self) -> Totals {
-        totals(&self.actors())
+        // Straight from the world, without copying names: `rigid bench` calls this at 64 000
+        // actors. hecs yields one archetype's entities in spawn (index) order.
+        let mut query = self.world.query::<(&Pose, &Velocity, &MassProps)>();
+        accumulate(query.iter())
     }
 }
 
@@ -181,12 +184,16 @@ impl ActorState {
 /// Totals over the non-fixed actors of `actors`.
 #[must_use]
 pub fn totals(actors: &[ActorState]) -> Totals {
+    accumulate(actors.iter().map(|a| (&a.pose, &a.velocity, &a.mass)))
+}
+
+fn accumulate<'a>(actors: impl Iterator<Item = (&'a Pose, &'a Velocity, &'a MassProps)>) -> Totals {
     let mut t = Totals { linear_momentum: Vector::ZERO, angular_momentum: Vector::ZERO, kinetic_energy: 0.0 };
-    for a in actors.iter().filter(|a| !a.mass.is_fixed()) {
-        let (m, v, w) = (a.mass.mass, a.velocity.linear, a.velocity.angular);
-        let iw = a.world_inertia() * w;
+    for (pose, vel, mass) in actors.filter(|(_, _, m)| !m.is_fixed()) {
+        let (m, v, w) = (mass.mass, vel.linear, vel.angular);
+        let iw = crate::bodies::rotate_tensor(pose.orientation, mass.inertia) * w;
         t.linear_momentum += m * v;
-        t.angular_momentum += a.pose.position.cross(m * v) + iw;
+        t.angular_momentum += pose.position.cross(m * v) + iw;
         t.kinetic_energy += 0.5 * m * v.length_squared() + 0.5 * w.dot(iw);
     }
     t
