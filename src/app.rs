@@ -2,12 +2,14 @@
 //! only parses arguments, prints errors and maps them to exit codes (CONTRACTS.md §3).
 
 use crate::cli::{BenchArgs, Command, RunArgs};
-use crate::error::{SceneError, StepError};
+use crate::error::{SceneError, SnapshotError, StepError};
 use crate::output::{TRAJECTORY_HEADER, state_json, trajectory_rows, write_atomic};
 use crate::scene::{self, SceneDef};
 use crate::sim::{ActorState, Sim};
+use crate::snapshot::Snapshot;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// The scene `rigid run` uses when given none (also `scenes/demo.ron`).
@@ -20,6 +22,9 @@ pub enum AppError {
     #[error(transparent)]
     #[diagnostic(transparent)]
     Scene(#[from] SceneError),
+    /// A snapshot to resume is unreadable or does not fit its scene (exit 2).
+    #[error(transparent)]
+    Snapshot(#[from] SnapshotError),
     /// The simulation went non-finite (exit 1).
     #[error(transparent)]
     Step(#[from] StepError),
@@ -30,6 +35,12 @@ pub enum AppError {
         path: PathBuf,
         /// The OS error.
         source: std::io::Error,
+    },
+    /// Stopped by Ctrl-C after saving what was asked (exit 130, the shell's code for SIGINT).
+    #[error("interrupted at step {step}")]
+    Interrupted {
+        /// Steps completed.
+        step: u64,
     },
     /// The thread pool could not start (exit 1).
     #[error("cannot start {threads} worker threads: {reason}")]
@@ -46,7 +57,8 @@ impl AppError {
     #[must_use]
     pub fn exit_code(&self) -> i32 {
         match self {
-            Self::Scene(_) => 2,
+            Self::Scene(_) | Self::Snapshot(_) => 2,
+            Self::Interrupted { .. } => 130,
             _ => 1,
         }
     }
@@ -83,19 +95,39 @@ fn in_pool(threads: Option<u32>, f: impl FnOnce() -> Result<(), AppError> + Send
     pool.install(f)
 }
 
+/// The name the built-in demo scene goes by in messages and snapshots.
+pub const DEMO_PATH: &str = "<built-in demo>";
+
 /// Loads a scene file, or the built-in demo for `None`; returns it with the path errors name.
 pub fn load_scene(path: Option<&Path>) -> Result<(SceneDef, PathBuf), SceneError> {
-    match path {
-        Some(p) => Ok((scene::load(p)?, p.to_path_buf())),
-        None => {
-            let p = PathBuf::from("<built-in demo>");
-            Ok((scene::parse(DEMO_SCENE, &p)?, p))
-        }
-    }
+    let (def, path, _) = load_scene_text(path)?;
+    Ok((def, path))
 }
 
-fn run(args: &RunArgs) -> Result<(), AppError> {
-    let (mut def, path) = load_scene(args.scene.as_deref())?;
+/// As `load_scene`, also returning the scene's text (snapshots embed it).
+pub fn load_scene_text(path: Option<&Path>) -> Result<(SceneDef, PathBuf, String), SceneError> {
+    let path = path.map_or_else(|| PathBuf::from(DEMO_PATH), Path::to_path_buf);
+    let text = if path == Path::new(DEMO_PATH) { DEMO_SCENE.to_string() } else { scene::read(&path)? };
+    Ok((scene::parse(&text, &path)?, path, text))
+}
+
+/// Set by the Ctrl-C handler; the run loop stops at the next step boundary.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// The sim to run, with its scene text and path: a fresh scene, or a resumed snapshot.
+fn prepare(args: &RunArgs) -> Result<(Sim, PathBuf, String, u64), AppError> {
+    if let Some(file) = &args.resume {
+        let snap = read_snapshot(file)?;
+        let path = PathBuf::from(&snap.scene_path);
+        let mut def = scene::parse(&snap.scene_text, &path)?;
+        def.dt = snap.dt;
+        def.schedule = Some(snap.schedule.clone());
+        let steps = args.steps.unwrap_or(def.steps);
+        let mut sim = crate::build::build(&def, &path)?;
+        snap.restore(&mut sim).map_err(|message| SnapshotError { path: file.clone(), at: None, message })?;
+        return Ok((sim, path, snap.scene_text, steps));
+    }
+    let (mut def, path, text) = load_scene_text(args.scene.as_deref())?;
     if let Some(dt) = args.dt {
         def.dt = dt;
     }
@@ -103,7 +135,45 @@ fn run(args: &RunArgs) -> Result<(), AppError> {
         def.schedule = Some(names.clone());
     }
     let steps = args.steps.unwrap_or(def.steps);
-    let mut sim = crate::build::build(&def, &path)?;
+    Ok((crate::build::build(&def, &path)?, path, text, steps))
+}
+
+fn read_snapshot(file: &Path) -> Result<Snapshot, SnapshotError> {
+    let fail = |at, message: String| SnapshotError { path: file.to_path_buf(), at, message };
+    let text = std::fs::read_to_string(file).map_err(|e| fail(None, format!("cannot read: {e}")))?;
+    let snap: Snapshot =
+        serde_json::from_str(&text).map_err(|e| fail(Some((e.line(), e.column())), format!("not a snapshot: {e}")))?;
+    if snap.format != crate::snapshot::SNAPSHOT_FORMAT {
+        return Err(fail(None, format!("snapshot format {} is not {}", snap.format, crate::snapshot::SNAPSHOT_FORMAT)));
+    }
+    Ok(snap)
+}
+
+fn print_warnings(sim: &mut Sim, path: &Path) {
+    let warnings = crate::warnings::scene_warnings(sim);
+    for w in warnings.iter().take(10) {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    if warnings.len() > 10 {
+        eprintln!("warning: {}: ... and {} more", path.display(), warnings.len() - 10);
+    }
+}
+
+fn run(args: &RunArgs) -> Result<(), AppError> {
+    let (mut sim, path, text, steps) = prepare(args)?;
+    if args.resume.is_none() {
+        print_warnings(&mut sim, &path);
+    }
+    // Ctrl-C stops at the next step boundary, so the saved state is a whole step's. A second
+    // handler cannot be set (tests call `run` repeatedly): then Ctrl-C just ends the process.
+    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+    let save = |sim: &Sim| match &args.save {
+        Some(file) => write_out(
+            file,
+            serde_json::to_string(&Snapshot::capture(sim, &path.display().to_string(), &text)).expect("plain data"),
+        ),
+        None => Ok(()),
+    };
     let show = !args.quiet && std::io::stderr().is_terminal();
     let before = sim.totals();
     let mut trajectory = match &args.trajectory {
@@ -114,6 +184,13 @@ fn run(args: &RunArgs) -> Result<(), AppError> {
     let start = Instant::now();
     let mut last_good: Option<Vec<ActorState>> = None;
     for _ in 0..steps {
+        if INTERRUPTED.swap(false, Ordering::SeqCst) {
+            save(&sim)?;
+            if let Some(out) = &args.out {
+                write_out(out, state_json(&sim, &sim.actors()))?;
+            }
+            return Err(AppError::Interrupted { step: sim.steps });
+        }
         if args.out.is_some() {
             last_good = Some(sim.actors());
         }
@@ -143,6 +220,7 @@ fn run(args: &RunArgs) -> Result<(), AppError> {
     if let Some(out) = &args.out {
         write_out(out, state_json(&sim, &sim.actors()))?;
     }
+    save(&sim)?;
     if !args.quiet {
         print_summary(&sim, &before, wall);
     }
@@ -190,7 +268,8 @@ fn print_summary(sim: &Sim, before: &crate::sim::Totals, wall: std::time::Durati
 
 fn check(path: &Path) -> Result<(), AppError> {
     let (def, path) = load_scene(Some(path))?;
-    let sim = crate::build::build(&def, &path)?;
+    let mut sim = crate::build::build(&def, &path)?;
+    print_warnings(&mut sim, &path);
     println!("{}: ok", path.display());
     println!("dt {} s, {} steps, gravity {:?}", def.dt, def.steps, def.gravity);
     println!("schedule: {}", sim.schedule.names().join(", "));

@@ -104,8 +104,9 @@ impl Bodies {
     /// The first row and field holding a NaN or infinity, if any (the NaN guard).
     #[must_use]
     pub fn first_non_finite(&self) -> Option<(usize, &'static str)> {
+        // Velocities first: a blow-up starts there and reaches positions in the same step.
         let vectors =
-            [("position", &self.position), ("velocity", &self.velocity), ("angular_velocity", &self.angular_velocity)];
+            [("velocity", &self.velocity), ("angular_velocity", &self.angular_velocity), ("position", &self.position)];
         // Cheap pass first: a sum is finite iff every term is (a NaN or ∞ survives addition
         // unless ∞ − ∞, which is itself NaN); the search below runs only on failure.
         let total: Scalar = vectors.iter().flat_map(|(_, v)| v.iter()).map(|v| v.x + v.y + v.z).sum::<Scalar>()

@@ -32,6 +32,7 @@ pub enum Command {
 #[derive(Debug, Args)]
 pub struct RunArgs {
     /// Scene file (RON); the built-in demo scene when omitted.
+    #[arg(conflicts_with = "resume")]
     pub scene: Option<PathBuf>,
     /// Steps to simulate (overrides the scene's `steps`).
     #[arg(long, value_parser = parse_steps)]
@@ -57,6 +58,12 @@ pub struct RunArgs {
     /// Comma-separated system names replacing the schedule, e.g. `cull_all_pairs,face,...`.
     #[arg(long, value_delimiter = ',')]
     pub schedule: Option<Vec<String>>,
+    /// Write the complete state to FILE at the end, and on Ctrl-C, for `--resume`.
+    #[arg(long, value_name = "FILE")]
+    pub save: Option<PathBuf>,
+    /// Continue the run saved in FILE (by `--save`) for `--steps` more steps.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["dt", "schedule"])]
+    pub resume: Option<PathBuf>,
 }
 
 impl Default for RunArgs {
@@ -72,6 +79,8 @@ impl Default for RunArgs {
             quiet: false,
             threads: None,
             schedule: None,
+            save: None,
+            resume: None,
         }
     }
 }
@@ -108,8 +117,7 @@ pub struct BenchArgs {
     pub plot: Option<PathBuf>,
 }
 
-/// Most steps one command may ask for: a typo should not start a run of centuries.
-pub const MAX_STEPS: u64 = 100_000_000;
+use crate::scene::MAX_STEPS;
 
 fn parse_steps(s: &str) -> Result<u64, String> {
     let n: u64 = s.parse().map_err(|_| format!("'{s}' is not a whole number of steps"))?;

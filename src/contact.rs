@@ -57,7 +57,8 @@ impl Contact {
 pub enum PairState {
     /// Bounding spheres overlap; no test has fired yet.
     Candidate,
-    /// A pruning system proved the bodies apart: no test can fire.
+    /// A pruning system proved the bodies apart: no test can fire (`prune` marks these, then
+    /// drops them from the list).
     Separated,
     /// A detection test found this contact.
     Found(Contact),

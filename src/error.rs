@@ -133,6 +133,18 @@ pub enum SceneError {
     },
 }
 
+/// A snapshot file that cannot be resumed (exit 2).
+#[derive(Debug, thiserror::Error)]
+#[error("{}{}: {message}", .path.display(), .at.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default())]
+pub struct SnapshotError {
+    /// The file.
+    pub path: PathBuf,
+    /// Line and column, where the problem is in the text.
+    pub at: Option<(usize, usize)>,
+    /// What is wrong.
+    pub message: String,
+}
+
 /// The simulation reached a non-finite state (NaN guard).
 #[derive(Debug, Clone, thiserror::Error)]
 #[error("non-finite state at step {step} after system '{system}': actor '{actor}' ({field})")]

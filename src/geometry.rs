@@ -32,8 +32,14 @@ impl Posed {
     /// Poses `mesh` at `pose`.
     #[must_use]
     pub fn new(mesh: Arc<ConvexMesh>, pose: &Pose) -> Self {
-        let mut posed =
-            Self { mesh, position: Vector::ZERO, vertices: Vec::new(), planes: Vec::new(), edge_directions: Vec::new(), bounds: (Vector::ZERO, Vector::ZERO) };
+        let mut posed = Self {
+            mesh,
+            position: Vector::ZERO,
+            vertices: Vec::new(),
+            planes: Vec::new(),
+            edge_directions: Vec::new(),
+            bounds: (Vector::ZERO, Vector::ZERO),
+        };
         posed.update(pose);
         posed
     }
@@ -45,7 +51,8 @@ impl Posed {
         self.position = x;
         self.vertices.clear();
         self.vertices.extend(self.mesh.vertices.iter().map(|&v| x + r * v));
-        self.bounds = self.vertices.iter().fold((Vector::INFINITY, Vector::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        self.bounds =
+            self.vertices.iter().fold((Vector::INFINITY, Vector::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         self.planes.clear();
         self.planes.extend(self.mesh.planes.iter().map(|p| {
             let normal = r * p.normal;

@@ -55,8 +55,10 @@ pub mod scene;
 pub mod schedule;
 pub mod shapes;
 pub mod sim;
+pub mod snapshot;
 pub mod spawners;
 pub mod step;
+pub mod warnings;
 
 /// The pipeline's stages, one file each, kept in the top-level `systems/` folder.
 // The crate's only `#[path]`: see DESIGN.md §2 before adding another.

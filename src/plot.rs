@@ -39,7 +39,9 @@ pub fn plot_svg(path: &Path, results: &[BenchResult]) -> Result<(), String> {
             .map_err(|e| fail(&e))?
             .label(name.as_str())
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], Palette99::pick(k)));
-        chart.draw_series(points.iter().map(|&p| Circle::new(p, 3, Palette99::pick(k).filled()))).map_err(|e| fail(&e))?;
+        chart
+            .draw_series(points.iter().map(|&p| Circle::new(p, 3, Palette99::pick(k).filled())))
+            .map_err(|e| fail(&e))?;
     }
     chart.configure_series_labels().border_style(BLACK).background_style(WHITE).draw().map_err(|e| fail(&e))?;
     root.present().map_err(|e| fail(&e))

@@ -10,6 +10,8 @@ use std::path::{Path, PathBuf};
 
 /// Largest scene file read [bytes]: bounds memory and time on hostile input.
 pub const MAX_SCENE_BYTES: u64 = 16 << 20;
+/// Most steps a scene may ask for: a typo should not start a run of centuries.
+pub const MAX_STEPS: u64 = 100_000_000;
 /// Deepest nesting the parser follows before giving up with an error.
 pub const MAX_NESTING: usize = 64;
 
@@ -313,6 +315,11 @@ pub fn parse(text: &str, path: &Path) -> Result<SceneDef, SceneError> {
 
 /// Reads and parses a scene file.
 pub fn load(path: &Path) -> Result<SceneDef, SceneError> {
+    parse(&read(path)?, path)
+}
+
+/// Reads a scene file's text: bounded in size, and UTF-8 (a binary file is named as such).
+pub fn read(path: &Path) -> Result<String, SceneError> {
     let io = |source| SceneError::Io { path: path.to_path_buf(), source };
     let file = std::fs::File::open(path).map_err(io)?;
     let mut bytes = Vec::new();
@@ -333,20 +340,43 @@ pub fn load(path: &Path) -> Result<SceneDef, SceneError> {
             at: at.into(),
         }
     })?;
-    parse(&text, path)
+    Ok(text)
 }
 
 fn parse_error(e: ron::error::SpannedError, text: &str, path: &Path) -> SceneError {
     let (line, col) = (e.span.start.line.max(1), e.span.start.col.max(1));
     let offset = offset_of(text, line, col);
+    let mut message = e.code.to_string();
+    // RON's type errors ("Expected float") do not say where; name the field being read.
+    if let ron::Error::ExpectedFloat
+    | ron::Error::ExpectedInteger
+    | ron::Error::ExpectedBoolean
+    | ron::Error::ExpectedString
+    | ron::Error::ExpectedArray
+    | ron::Error::ExpectedNamedStructLike(_)
+    | ron::Error::ExpectedStructLike
+    | ron::Error::ExpectedMap = e.code
+        && let Some(field) = field_before(text, offset)
+    {
+        message = format!("{message} for field `{field}`");
+    }
     SceneError::Parse {
         path: path.to_path_buf(),
         line,
         col,
-        message: e.code.to_string(),
+        message,
         text: NamedSource::new(path.display().to_string(), text.to_string()),
         at: offset.into(),
     }
+}
+
+/// The `name` of the nearest `name:` before `offset`, if the text there is a field.
+fn field_before(text: &str, offset: usize) -> Option<&str> {
+    let before = text.get(..offset)?.trim_end();
+    let before = before.strip_suffix(':')?.trim_end();
+    let start = before.rfind(|c: char| !(c.is_alphanumeric() || c == '_')).map_or(0, |i| i + 1);
+    let name = &before[start..];
+    (!name.is_empty()).then_some(name)
 }
 
 fn offset_of(text: &str, line: usize, col: usize) -> usize {
@@ -370,6 +400,9 @@ pub fn invalid(path: &Path, actor: &str, field: &str, reason: String) -> SceneEr
 fn check_scene(scene: &SceneDef, path: &Path) -> Result<(), SceneError> {
     if !(scene.dt.is_finite() && scene.dt > 0.0) {
         return Err(invalid(path, "scene", "dt", format!("must be a finite number > 0 s, got {}", scene.dt)));
+    }
+    if scene.steps > MAX_STEPS {
+        return Err(invalid(path, "scene", "steps", format!("{} is more than the limit of {MAX_STEPS}", scene.steps)));
     }
     if !crate::math::is_finite_vector(vector(scene.gravity)) {
         return Err(invalid(path, "scene", "gravity", "must be finite".into()));

@@ -56,7 +56,7 @@ pub struct Sim {
     pub contacts: [u64; 3],
     /// Timing of the last step.
     pub profile: StepProfile,
-    names: Vec<String>,
+    pub(crate) names: Vec<String>,
 }
 
 impl Sim {

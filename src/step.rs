@@ -102,6 +102,19 @@ impl PosedCache {
     }
 }
 
+/// One body in the grid's cell-sorted list.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CellEntry {
+    /// Centre [m].
+    pub position: Vector,
+    /// Bounding radius [m].
+    pub radius: Scalar,
+    /// Actor index.
+    pub index: u32,
+    /// Fixed actor.
+    pub fixed: bool,
+}
+
 /// Reused buffers of the grid broad phase (`cull`).
 #[derive(Clone, Debug, Default)]
 pub struct CullScratch {
@@ -115,8 +128,9 @@ pub struct CullScratch {
     pub cell_start: Vec<u32>,
     /// Fill cursors while binning.
     pub fill: Vec<u32>,
-    /// Bodies sorted by cell.
-    pub order: Vec<u32>,
+    /// Bodies sorted by cell, with what the sphere test reads, so a neighbour scan reads one
+    /// contiguous run instead of three scattered arrays.
+    pub order: Vec<CellEntry>,
     /// Pairs found per chunk of bodies, concatenated in order.
     pub chunks: Vec<Vec<Pair>>,
 }

@@ -5,7 +5,7 @@
 
 use crate::contact::Pair;
 use crate::math::{Scalar, Vector};
-use crate::step::{CullScratch, StepContext};
+use crate::step::{CellEntry, CullScratch, StepContext};
 use hecs::World;
 use rayon::prelude::*;
 
@@ -137,12 +137,13 @@ impl Grid {
             s.cell_start[c + 1] += s.cell_start[c];
         }
         s.order.clear();
-        s.order.resize(count, 0);
+        s.order.resize(count, CellEntry::default());
         s.fill.clear();
         s.fill.extend_from_slice(&s.cell_start);
         for i in ordinary() {
             let c = s.cell_of[i] as usize;
-            s.order[s.fill[c] as usize] = i as u32;
+            s.order[s.fill[c] as usize] =
+                CellEntry { position: b.position[i], radius: b.radius[i], index: i as u32, fixed: b.is_fixed(i) };
             s.fill[c] += 1;
         }
         grid
@@ -162,11 +163,11 @@ impl Grid {
         &self,
         i: usize,
         b: &crate::bodies::Bodies,
-        (start, order, _): (&Vec<u32>, &Vec<u32>, &Vec<u32>),
+        (start, order, _): (&Vec<u32>, &Vec<CellEntry>, &Vec<u32>),
         large: &[u32],
         out: &mut Vec<Pair>,
     ) {
-        let (xi, ri) = (b.position[i], b.radius[i]);
+        let (xi, ri, fixed_i) = (b.position[i], b.radius[i], b.is_fixed(i));
         let test = |j: usize, out: &mut Vec<Pair>| {
             if j > i && !(b.is_fixed(i) && b.is_fixed(j)) && spheres_overlap(xi, ri, b.position[j], b.radius[j]) {
                 out.push(Pair::candidate(i as u32, j as u32));
@@ -182,8 +183,11 @@ impl Grid {
             for y in range(1) {
                 let row = self.index([0, y, z]);
                 let (x0, x1) = (*range(0).start(), *range(0).end());
-                for &j in &order[start[row + x0] as usize..start[row + x1 + 1] as usize] {
-                    test(j as usize, out);
+                for e in &order[start[row + x0] as usize..start[row + x1 + 1] as usize] {
+                    let j = e.index as usize;
+                    if j > i && !(fixed_i && e.fixed) && spheres_overlap(xi, ri, e.position, e.radius) {
+                        out.push(Pair::candidate(i as u32, e.index));
+                    }
                 }
             }
         }

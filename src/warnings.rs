@@ -1,0 +1,65 @@
+//! Warnings for scenes that will misbehave (issue #7): actors that start overlapping, and
+//! actors fast enough to tunnel (PHYSICS.md §5). `rigid check` and `rigid run` print them;
+//! they do not stop a run.
+
+use crate::math::Scalar;
+use crate::sim::Sim;
+
+/// Overlap depth below which two actors count as touching, not overlapping, relative to the
+/// thinner one: touching starts are intended (a Newton's cradle).
+pub const OVERLAP_TOLERANCE: Scalar = 1e-6;
+/// Safe travel per step as a fraction of the thinnest actor (PHYSICS.md §5: beyond about a
+/// quarter the closest face can be the far one, the normal flips and the body passes through).
+pub const TUNNEL_FRACTION: Scalar = 0.25;
+
+/// The warnings for the initial state of `sim`, worded for the user. Runs the detection
+/// systems on the initial state; the sim's clock and counts are left as they were.
+#[must_use]
+pub fn scene_warnings(sim: &mut Sim) -> Vec<String> {
+    let mut out = overlaps(sim);
+    out.extend(tunnelling(sim));
+    out
+}
+
+fn overlaps(sim: &mut Sim) -> Vec<String> {
+    let ctx = &mut sim.ctx;
+    ctx.begin_step(&sim.world);
+    for name in ["cull", "prune", "face", "vertex", "edge"] {
+        let system = crate::systems::find(name).expect("shipped systems exist");
+        (system.run)(&mut sim.world, ctx);
+    }
+    let names = &sim.names;
+    let mut out = Vec::new();
+    for pair in &ctx.pairs {
+        let Some(c) = pair.contact() else { continue };
+        let (a, b) = (pair.a as usize, pair.b as usize);
+        let thin = ctx.meshes.get(ctx.bodies.mesh[a]).thickness.min(ctx.meshes.get(ctx.bodies.mesh[b]).thickness);
+        if c.depth > OVERLAP_TOLERANCE * thin {
+            out.push(format!("actors '{}' and '{}' start overlapping by {:.3e} m", names[a], names[b], c.depth));
+        }
+    }
+    ctx.pairs.clear();
+    ctx.stats = crate::step::StepStats::default();
+    ctx.step -= 1; // the detection pass above is not a step
+    out
+}
+
+fn tunnelling(sim: &Sim) -> Vec<String> {
+    let b = &sim.ctx.bodies;
+    let thinnest = (0..b.len()).map(|i| sim.ctx.meshes.get(b.mesh[i]).thickness).fold(Scalar::INFINITY, Scalar::min);
+    let limit = TUNNEL_FRACTION * thinnest;
+    let names = sim.names();
+    (0..b.len())
+        .filter(|&i| !b.is_fixed(i))
+        .filter_map(|i| {
+            let travel = (b.velocity[i].length() + b.angular_velocity[i].length() * b.radius[i]) * sim.ctx.dt;
+            (travel > limit).then(|| {
+                format!(
+                    "actor '{}' moves {travel:.3e} m per step, more than a quarter of the thinnest actor ({thinnest:.3e} m): \
+                     it may pass through others; lower dt or the speed",
+                    names[i]
+                )
+            })
+        })
+        .collect()
+}
