@@ -16,6 +16,8 @@ pub struct Bodies {
     pub position: Vec<Vector>,
     /// Body → world rotation.
     pub orientation: Vec<Quat>,
+    /// The same rotation as a matrix, computed once per step for the pair loops.
+    pub rotation: Vec<Mat3>,
     /// Linear velocity [m/s].
     pub velocity: Vec<Vector>,
     /// Angular velocity, world frame [rad/s].
@@ -75,6 +77,7 @@ impl Bodies {
             self.entity[i] = entity;
             self.position[i] = pose.position;
             self.orientation[i] = pose.orientation;
+            self.rotation[i] = Mat3::from_quat(pose.orientation);
             self.velocity[i] = vel.linear;
             self.angular_velocity[i] = vel.angular;
             self.inv_mass[i] = mass.inv_mass;
@@ -127,6 +130,7 @@ impl Bodies {
         self.entity.resize(n, Entity::DANGLING);
         self.position.resize(n, Vector::ZERO);
         self.orientation.resize(n, Quat::IDENTITY);
+        self.rotation.resize(n, Mat3::IDENTITY);
         self.velocity.resize(n, Vector::ZERO);
         self.angular_velocity.resize(n, Vector::ZERO);
         self.inv_mass.resize(n, 0.0);

@@ -54,6 +54,9 @@ pub struct ConvexMesh {
     pub volume: Scalar,
     /// Inertia about the centre of mass at density 1 [kg·m² per kg/m³].
     pub unit_inertia: Mat3,
+    /// Half extents when the mesh is a box aligned with its body axes (its 8 vertices are
+    /// (±x, ±y, ±z)): pairs of such boxes get the cheap oriented-box separation test.
+    pub box_half_extents: Option<Vector>,
 }
 
 impl ConvexMesh {
@@ -85,6 +88,7 @@ impl ConvexMesh {
             .iter()
             .map(|p| vertices.iter().map(|&v| p.offset - p.normal.dot(v)).fold(0.0, Scalar::max))
             .fold(Scalar::INFINITY, Scalar::min);
+        let box_half_extents = cuboid_half_extents(&vertices);
         let edges = unique_edges(&triangles);
         let edge_directions = feature_edge_directions(&vertices, &triangles);
         let mesh = Self {
@@ -93,6 +97,7 @@ impl ConvexMesh {
             edges,
             planes,
             edge_directions,
+            box_half_extents,
             radius,
             thickness,
             volume: props.volume,
@@ -272,6 +277,16 @@ fn check_convex(vertices: &[Vector], planes: &[Plane], size: Scalar) -> Result<(
     Ok(())
 }
 
+/// `Some(h)` when the vertices are exactly the 8 corners (±h.x, ±h.y, ±h.z).
+fn cuboid_half_extents(vertices: &[Vector]) -> Option<Vector> {
+    let h = vertices.first()?.abs();
+    let corner = |v: &Vector| (v.abs() - h).abs().max_element() <= 1e-12 * h.max_element();
+    let mut signs: Vec<[bool; 3]> = vertices.iter().map(|v| [v.x > 0.0, v.y > 0.0, v.z > 0.0]).collect();
+    signs.sort_unstable();
+    signs.dedup();
+    (vertices.len() == 8 && vertices.iter().all(corner) && signs.len() == 8).then_some(h)
+}
+
 /// Unit directions of the edges whose two triangles are not coplanar, deduplicated up to sign
 /// (a box's face diagonals are not feature edges: its 18 edges give 3 directions).
 fn feature_edge_directions(vertices: &[Vector], triangles: &[[u32; 3]]) -> Vec<Vector> {
@@ -323,6 +338,7 @@ mod tests {
         let (m, c) = ConvexMesh::new(v, t).expect("valid box");
         assert_eq!((m.vertices.len(), m.triangles.len(), m.edges.len(), m.planes.len()), (8, 12, 18, 6));
         assert_eq!(m.edge_directions.len(), 3);
+        assert_eq!(m.box_half_extents, Some(Vector::splat(0.5)));
         assert_eq!(c, Vector::ZERO);
         assert!((m.radius - 3f64.sqrt() / 2.0).abs() < 1e-15);
         assert!((m.thickness - 1.0).abs() < 1e-15);

@@ -70,11 +70,11 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
         for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
             let start = out.len();
             grid.pairs_of(i, b, cells, large, out);
-            out[start..].sort_unstable_by_key(|p| p.b);
+            out[start..].sort_unstable_by_key(|&(_, b)| b);
         }
     });
     for chunk in &s.chunks[..chunks] {
-        ctx.pairs.extend_from_slice(chunk);
+        ctx.pairs.extend(chunk.iter().map(|&(a, b)| Pair::candidate(a, b)));
     }
     ctx.stats.candidates = ctx.pairs.len();
 }
@@ -165,12 +165,12 @@ impl Grid {
         b: &crate::bodies::Bodies,
         (start, order, _): (&Vec<u32>, &Vec<CellEntry>, &Vec<u32>),
         large: &[u32],
-        out: &mut Vec<Pair>,
+        out: &mut Vec<(u32, u32)>,
     ) {
         let (xi, ri, fixed_i) = (b.position[i], b.radius[i], b.is_fixed(i));
-        let test = |j: usize, out: &mut Vec<Pair>| {
+        let test = |j: usize, out: &mut Vec<(u32, u32)>| {
             if j > i && !(b.is_fixed(i) && b.is_fixed(j)) && spheres_overlap(xi, ri, b.position[j], b.radius[j]) {
-                out.push(Pair::candidate(i as u32, j as u32));
+                out.push((i as u32, j as u32));
             }
         };
         if ri > self.threshold {
@@ -186,7 +186,7 @@ impl Grid {
                 for e in &order[start[row + x0] as usize..start[row + x1 + 1] as usize] {
                     let j = e.index as usize;
                     if j > i && !(fixed_i && e.fixed) && spheres_overlap(xi, ri, e.position, e.radius) {
-                        out.push(Pair::candidate(i as u32, e.index));
+                        out.push((i as u32, e.index));
                     }
                 }
             }

@@ -8,7 +8,7 @@
 //! which never shows the intermediate-axis flip and drifts L by 6 % (E15, E16).
 
 use crate::bodies::rotate_tensor;
-use crate::math::{Quat, Scalar, Vector, exp_map};
+use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
 use crate::step::StepContext;
 use hecs::World;
 use rayon::prelude::*;
@@ -55,9 +55,9 @@ pub fn integrate(world: &mut World, ctx: &mut StepContext) {
     let (dt, g) = (ctx.dt, ctx.params.gravity);
     let b = &mut ctx.bodies;
     let rows = b.position.par_iter_mut().zip(b.orientation.par_iter_mut()).zip(b.velocity.par_iter_mut());
-    let rest = b.angular_velocity.par_iter_mut().zip(b.inv_inertia_world.par_iter_mut());
+    let rest = b.angular_velocity.par_iter_mut().zip(b.inv_inertia_world.par_iter_mut()).zip(b.rotation.par_iter_mut());
     let fixed = (&b.inv_mass, &b.principal_axes, &b.principal_moments, &b.inv_inertia_body);
-    rows.zip(rest).enumerate().for_each(|(i, (((x, q), v), (w, inv_w)))| {
+    rows.zip(rest).enumerate().for_each(|(i, (((x, q), v), ((w, inv_w), rotation)))| {
         if fixed.0[i] == 0.0 {
             return;
         }
@@ -65,6 +65,7 @@ pub fn integrate(world: &mut World, ctx: &mut StepContext) {
         *x += *v * dt;
         (*q, *w) = rotate_free(*q, *w, fixed.1[i], fixed.2[i], dt);
         *inv_w = rotate_tensor(*q, fixed.3[i]);
+        *rotation = Mat3::from_quat(*q);
     });
     for i in 0..ctx.bodies.len() {
         ctx.mark_moved(i);
