@@ -1,7 +1,7 @@
 //! What each `rigid` subcommand does, as library functions so tests can call them; `main`
 //! only parses arguments, prints errors and maps them to exit codes (CONTRACTS.md §3).
 
-use crate::cli::{BenchArgs, Command, RunArgs};
+use crate::cli::{BenchArgs, Command, ExportArgs, RenderArgs, RunArgs, SceneArgs};
 use crate::error::{SceneError, SnapshotError, StepError};
 use crate::output::{TRAJECTORY_HEADER, state_json, trajectory_rows, write_atomic};
 use crate::scene::{self, SceneDef};
@@ -82,6 +82,8 @@ pub fn execute(command: Command) -> Result<(), AppError> {
             let threads = args.threads;
             in_pool(threads, || bench(&args))
         }
+        Command::Render(args) => in_pool(None, || render(&args)),
+        Command::Export(args) => in_pool(None, || export(&args)),
     }
 }
 
@@ -343,5 +345,117 @@ fn bench(args: &BenchArgs) -> Result<(), AppError> {
             .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()))
             .map_err(|reason| write_error(path, std::io::Error::other(reason)))?;
     }
+    Ok(())
+}
+
+/// Loads and builds the scene of `render`/`export`; returns it with the number of steps.
+fn scene_sim(args: &SceneArgs) -> Result<(SceneDef, Sim, u64), AppError> {
+    let (mut def, path) = load_scene(args.scene.as_deref())?;
+    if let Some(dt) = args.dt {
+        def.dt = dt;
+    }
+    let steps = args.steps.unwrap_or(def.steps);
+    let sim = crate::build::build(&def, &path)?;
+    Ok((def, sim, steps))
+}
+
+/// Runs `steps` steps, calling `visit` at step 0, every `every`-th step and the last step.
+fn sample(
+    sim: &mut Sim,
+    steps: u64,
+    every: u64,
+    mut visit: impl FnMut(&Sim) -> Result<(), AppError>,
+) -> Result<(), AppError> {
+    visit(sim)?;
+    for _ in 0..steps {
+        sim.step()?;
+        if sim.steps.is_multiple_of(every) || sim.steps == steps {
+            visit(sim)?;
+        }
+    }
+    Ok(())
+}
+
+fn render(args: &RenderArgs) -> Result<(), AppError> {
+    use crate::render::Overlay;
+    let (def, mut sim, steps) = scene_sim(&args.scene)?;
+    std::fs::create_dir_all(&args.out).map_err(|e| write_error(&args.out, e))?;
+    let (w, h) = args.size;
+    let overlay = Overlay { contacts: args.contacts, solid_fixed: args.solid_fixed };
+    let camera = choose_camera(args, def.camera, &sim);
+    let mut gif = Vec::new();
+    let mut frames = 0_u32;
+    let mut encoder = args.gif.as_ref().map(|_| {
+        let mut e = image::codecs::gif::GifEncoder::new_with_speed(&mut gif, 10);
+        let _ = e.set_repeat(image::codecs::gif::Repeat::Infinite);
+        e
+    });
+    // Real-time playback where GIF delays allow (at least 20 ms a frame).
+    let delay_ms = ((def.dt * args.scene.every as f64 * 1000.0).round() as u32).max(20);
+    sample(&mut sim, steps, args.scene.every, |sim| {
+        let image = crate::render::render(sim, &camera, w, h, overlay);
+        let file = args.out.join(format!("frame-{frames:05}.png"));
+        let mut png = Vec::new();
+        image
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .map_err(|e| write_error(&file, std::io::Error::other(e)))?;
+        write_out(&file, png)?;
+        if let (Some(enc), Some(path)) = (encoder.as_mut(), &args.gif) {
+            let rgba = image::DynamicImage::ImageRgb8(image).into_rgba8();
+            let frame = image::Frame::from_parts(rgba, 0, 0, image::Delay::from_numer_denom_ms(delay_ms, 1));
+            enc.encode_frame(frame).map_err(|e| write_error(path, std::io::Error::other(e)))?;
+        }
+        frames += 1;
+        Ok(())
+    })?;
+    drop(encoder);
+    if let Some(path) = &args.gif {
+        write_out(path, gif)?;
+    }
+    println!("wrote {frames} frames of {w}x{h} to {}", args.out.display());
+    Ok(())
+}
+
+/// The camera: `--eye`/`--target` over the scene's `camera`, over one fitted to the scene.
+fn choose_camera(args: &RenderArgs, scene: Option<crate::scene::CameraDef>, sim: &Sim) -> crate::render::Camera {
+    use crate::math::Vector;
+    let base = scene.map_or_else(
+        || crate::render::Camera::fit(sim),
+        |c| crate::render::Camera {
+            eye: crate::scene::vector(c.eye),
+            target: crate::scene::vector(c.target),
+            fov_y: c.fov.to_radians(),
+        },
+    );
+    crate::render::Camera {
+        eye: args.eye.map_or(base.eye, Vector::from_array),
+        target: args.target.map_or(base.target, Vector::from_array),
+        fov_y: base.fov_y,
+    }
+}
+
+fn export(args: &ExportArgs) -> Result<(), AppError> {
+    use crate::export::{ExportScene, Keyframe, glb};
+    let (_, mut sim, steps) = scene_sim(&args.scene)?;
+    let mut keyframes = Vec::new();
+    sample(&mut sim, steps, args.scene.every, |sim| {
+        let poses = sim.actors().iter().map(|a| (a.pose.position.to_array(), a.pose.orientation.to_array())).collect();
+        keyframes.push(Keyframe { time: sim.time, poses });
+        Ok(())
+    })?;
+    let mut query = sim.world.query::<(&crate::ActorIndex, &crate::Mesh, &crate::MassProps)>();
+    let mut rows: Vec<_> = query.iter().map(|(i, m, mass)| (i.0 as usize, m.id, mass.is_fixed())).collect();
+    drop(query);
+    rows.sort_by_key(|r| r.0);
+    let meshes = (0..sim.ctx.meshes.len()).map(|k| sim.ctx.meshes.get(crate::MeshId(k as u32))).collect();
+    let actors = rows
+        .iter()
+        .map(|&(i, mesh, fixed)| {
+            (sim.names()[i].clone(), mesh.0 as usize, fixed, crate::render::actor_colour(i, fixed))
+        })
+        .collect();
+    let bytes = glb(&ExportScene { actors, meshes }, &keyframes);
+    write_out(&args.glb, &bytes)?;
+    println!("wrote {} actors, {} keyframes to {}", sim.len(), keyframes.len(), args.glb.display());
     Ok(())
 }

@@ -26,6 +26,66 @@ pub enum Command {
     Systems,
     /// Benchmark a built-in scene (BENCHMARKS.md).
     Bench(BenchArgs),
+    /// Simulate a scene and draw PNG frames (and optionally an animated GIF), no GPU needed.
+    Render(RenderArgs),
+    /// Simulate a scene and write it as an animated binary glTF 2.0 file.
+    Export(ExportArgs),
+}
+
+/// The scene and its length, shared by `render` and `export`.
+#[derive(Debug, Args)]
+pub struct SceneArgs {
+    /// Scene file (RON); the built-in demo scene when omitted.
+    pub scene: Option<PathBuf>,
+    /// Steps to simulate (overrides the scene's `steps`).
+    #[arg(long, value_parser = parse_steps)]
+    pub steps: Option<u64>,
+    /// Seconds per step (overrides the scene's `dt`).
+    #[arg(long, value_parser = parse_positive)]
+    pub dt: Option<f64>,
+    /// Sample every K-th step (step 0 and the last step are always included).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..))]
+    pub every: u64,
+}
+
+/// `rigid render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene, steps and sampling.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Directory for the frames `frame-00000.png`, ... (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Image size.
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Also write an animated GIF of the frames.
+    #[arg(long, value_name = "FILE")]
+    pub gif: Option<PathBuf>,
+    /// Camera position `x,y,z` [m] (default: fitted to the scene, or the scene's `camera`).
+    #[arg(long, value_parser = parse_vector, allow_hyphen_values = true)]
+    pub eye: Option<[f64; 3]>,
+    /// Point the camera looks at, `x,y,z` [m].
+    #[arg(long, value_parser = parse_vector, allow_hyphen_values = true)]
+    pub target: Option<[f64; 3]>,
+    /// Draw each frame's contact points (yellow) and normals (red).
+    #[arg(long)]
+    pub contacts: bool,
+    /// Fill fixed actors (default: outlines, so closed boxes do not hide their contents).
+    #[arg(long)]
+    pub solid_fixed: bool,
+}
+
+/// `rigid export`.
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// Scene, steps and sampling.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The .glb file to write.
+    #[arg(long, value_name = "FILE")]
+    pub glb: PathBuf,
 }
 
 /// `rigid run`.
@@ -125,6 +185,27 @@ fn parse_steps(s: &str) -> Result<u64, String> {
         return Err(format!("{n} steps is more than the limit of {MAX_STEPS}"));
     }
     Ok(n)
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT, e.g. 640x480"))?;
+    let dim = |d: &str| d.trim().parse::<u32>().ok().filter(|v| (16..=8192).contains(v));
+    match (dim(w), dim(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("'{s}': width and height must be whole numbers from 16 to 8192")),
+    }
+}
+
+fn parse_vector(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("'{s}' is not x,y,z"))?;
+    match parts[..] {
+        [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok([x, y, z]),
+        _ => Err(format!("'{s}' is not three finite numbers x,y,z")),
+    }
 }
 
 fn parse_positive(s: &str) -> Result<f64, String> {

@@ -46,6 +46,9 @@ pub struct ConvexMesh {
     /// Directions of the feature edges (between non-coplanar faces), each once up to sign:
     /// the edge axes of a separating-axis test (a box has 3).
     pub edge_directions: Vec<Vector>,
+    /// The feature edges themselves, `(i, j)` with `i < j`, sorted: the outline a renderer draws
+    /// (a box has 12).
+    pub feature_edges: Vec<[u32; 2]>,
     /// Bounding-sphere radius about the centre of mass, `max |p|` [m] (PHYSICS.md §1.2).
     pub radius: Scalar,
     /// Smallest width over the face normals [m]: the thickness that bounds safe speeds (§5).
@@ -90,13 +93,14 @@ impl ConvexMesh {
             .fold(Scalar::INFINITY, Scalar::min);
         let box_half_extents = cuboid_half_extents(&vertices);
         let edges = unique_edges(&triangles);
-        let edge_directions = feature_edge_directions(&vertices, &triangles);
+        let (feature_edges, edge_directions) = feature_edges(&vertices, &triangles);
         let mesh = Self {
             vertices,
             triangles,
             edges,
             planes,
             edge_directions,
+            feature_edges,
             box_half_extents,
             radius,
             thickness,
@@ -287,9 +291,10 @@ fn cuboid_half_extents(vertices: &[Vector]) -> Option<Vector> {
     (vertices.len() == 8 && vertices.iter().all(corner) && signs.len() == 8).then_some(h)
 }
 
-/// Unit directions of the edges whose two triangles are not coplanar, deduplicated up to sign
-/// (a box's face diagonals are not feature edges: its 18 edges give 3 directions).
-fn feature_edge_directions(vertices: &[Vector], triangles: &[[u32; 3]]) -> Vec<Vector> {
+/// The edges whose two triangles are not coplanar, and their unit directions deduplicated up
+/// to sign (a box's face diagonals are not feature edges: its 18 edges give 12 and 3
+/// directions).
+fn feature_edges(vertices: &[Vector], triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<Vector>) {
     let normal = |t: &[u32; 3]| {
         let [a, b, c] = t.map(|i| vertices[i as usize]);
         (b - a).cross(c - a).try_normalize()
@@ -303,18 +308,22 @@ fn feature_edge_directions(vertices: &[Vector], triangles: &[[u32; 3]]) -> Vec<V
     }
     let mut keys: Vec<_> = by_edge.keys().copied().collect();
     keys.sort_unstable();
-    let mut dirs: Vec<Vector> = Vec::new();
+    let (mut edges, mut dirs): (Vec<[u32; 2]>, Vec<Vector>) = (Vec::new(), Vec::new());
     for (a, b) in keys {
         let coplanar = match by_edge[&(a, b)][..] {
             [Some(n1), Some(n2)] => (n1 - n2).length() <= PLANE_MERGE_TOLERANCE,
             _ => false,
         };
         let Some(d) = (vertices[b as usize] - vertices[a as usize]).try_normalize() else { continue };
-        if !coplanar && !dirs.iter().any(|e| e.cross(d).length() <= PLANE_MERGE_TOLERANCE) {
+        if coplanar {
+            continue;
+        }
+        edges.push([a, b]);
+        if !dirs.iter().any(|e| e.cross(d).length() <= PLANE_MERGE_TOLERANCE) {
             dirs.push(d);
         }
     }
-    dirs
+    (edges, dirs)
 }
 
 fn unique_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
@@ -337,7 +346,7 @@ mod tests {
         let (v, t) = box_raw(Vector::ONE);
         let (m, c) = ConvexMesh::new(v, t).expect("valid box");
         assert_eq!((m.vertices.len(), m.triangles.len(), m.edges.len(), m.planes.len()), (8, 12, 18, 6));
-        assert_eq!(m.edge_directions.len(), 3);
+        assert_eq!((m.edge_directions.len(), m.feature_edges.len()), (3, 12));
         assert_eq!(m.box_half_extents, Some(Vector::splat(0.5)));
         assert_eq!(c, Vector::ZERO);
         assert!((m.radius - 3f64.sqrt() / 2.0).abs() < 1e-15);

@@ -48,6 +48,26 @@ pub struct SceneDef {
     /// Contact-solver settings.
     #[serde(default)]
     pub solver: SolverDef,
+    /// Camera for `rigid render` (default: fitted to the scene).
+    #[serde(default)]
+    pub camera: Option<CameraDef>,
+}
+
+/// A camera for `rigid render`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, rename = "Camera")]
+pub struct CameraDef {
+    /// Eye position [m].
+    pub eye: V3,
+    /// Point looked at [m].
+    pub target: V3,
+    /// Vertical field of view [degrees] (default 45).
+    #[serde(default = "default_fov")]
+    pub fov: Scalar,
+}
+
+fn default_fov() -> Scalar {
+    crate::render::DEFAULT_FOV_DEGREES
 }
 
 fn default_dt() -> Scalar {
@@ -406,6 +426,15 @@ fn check_scene(scene: &SceneDef, path: &Path) -> Result<(), SceneError> {
     }
     if !crate::math::is_finite_vector(vector(scene.gravity)) {
         return Err(invalid(path, "scene", "gravity", "must be finite".into()));
+    }
+    if let Some(c) = scene.camera {
+        let finite = crate::math::is_finite_vector(vector(c.eye)) && crate::math::is_finite_vector(vector(c.target));
+        if !finite || vector(c.eye) == vector(c.target) {
+            return Err(invalid(path, "scene", "camera", "eye and target must be finite and different".into()));
+        }
+        if !(c.fov > 1.0 && c.fov < 179.0) {
+            return Err(invalid(path, "scene", "camera.fov", format!("must be in 1..179 degrees, got {}", c.fov)));
+        }
     }
     let s = scene.solver;
     if !(1..=1000).contains(&s.max_sweeps) {
