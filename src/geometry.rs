@@ -11,6 +11,11 @@ use std::sync::Arc;
 /// approach test of §2.5 keeps touching-but-separating bodies from getting impulses.
 pub const INSIDE_TOLERANCE: Scalar = 1e-9;
 
+/// Planes this close to the nearest one [fraction of the body's radius] tie for "closest face":
+/// a vertex sitting on an edge or a corner (a box stacked exactly on another) is nearly as
+/// close to the side faces as to the top, and rounding must not pick a side.
+pub const FACE_TIE_TOLERANCE: Scalar = 1e-4;
+
 /// A mesh at a pose: world-space vertices and face planes, computed once per body per step.
 #[derive(Clone, Debug)]
 pub struct Posed {
@@ -66,6 +71,25 @@ impl Posed {
     #[must_use]
     pub fn tolerance(&self) -> Scalar {
         INSIDE_TOLERANCE * self.mesh.radius
+    }
+
+    /// The outward normal of the face closest to inside point `p` (PHYSICS.md §1.1): the plane
+    /// of largest signed distance, ties (within `FACE_TIE_TOLERANCE`) going to the face that
+    /// looks most along `toward` (the direction to the other body). PHYSICS.md breaks exact
+    /// ties by the relative velocity; the direction to the other body needs no velocity, is
+    /// deterministic, and for a box resting on another picks the top face, not a side.
+    #[must_use]
+    pub fn closest_face_normal(&self, p: Vector, toward: Vector) -> Vector {
+        let (best, _) = self.max_plane_distance(p);
+        let tie = FACE_TIE_TOLERANCE * self.mesh.radius;
+        let mut chosen = (Scalar::NEG_INFINITY, Vector::ZERO);
+        for pl in &self.planes {
+            let facing = pl.normal.dot(toward);
+            if pl.normal.dot(p) - pl.offset >= best - tie && facing > chosen.0 {
+                chosen = (facing, pl.normal);
+            }
+        }
+        chosen.1
     }
 
     /// Largest signed distance of `p` to a face plane and that plane's index (the closest face

@@ -45,6 +45,7 @@ pub mod contact;
 pub mod error;
 pub mod export;
 pub mod geometry;
+pub mod manifold;
 pub mod mass;
 pub mod math;
 pub mod mesh;

@@ -88,14 +88,24 @@ pub struct SolverDef {
     pub max_sweeps: u32,
     /// Fraction of penetration removed per step, 0..=1 (default 0.4).
     pub correction: Scalar,
-    /// Penetration left alone, fraction of the thinner body, 0..=1 (default 0.005).
+    /// Penetration left alone, fraction of the thinner body, 0..=1 (default 0.0005).
     pub slop: Scalar,
+    /// Iterations of the resting-contact solver `solve`, 1..=1000 (default 30).
+    pub iterations: u32,
+    /// Approach speed [m/s] above which contacts bounce (default 2|g|·dt).
+    pub restitution_threshold: Option<Scalar>,
 }
 
 impl Default for SolverDef {
     fn default() -> Self {
         let p = crate::step::Params::default();
-        Self { max_sweeps: p.max_sweeps, correction: p.correction, slop: p.slop }
+        Self {
+            max_sweeps: p.max_sweeps,
+            correction: p.correction,
+            slop: p.slop,
+            iterations: p.iterations,
+            restitution_threshold: p.restitution_threshold,
+        }
     }
 }
 
@@ -439,6 +449,19 @@ fn check_scene(scene: &SceneDef, path: &Path) -> Result<(), SceneError> {
     let s = scene.solver;
     if !(1..=1000).contains(&s.max_sweeps) {
         return Err(invalid(path, "scene", "solver.max_sweeps", format!("must be 1..=1000, got {}", s.max_sweeps)));
+    }
+    if !(1..=1000).contains(&s.iterations) {
+        return Err(invalid(path, "scene", "solver.iterations", format!("must be 1..=1000, got {}", s.iterations)));
+    }
+    if let Some(t) = s.restitution_threshold
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(invalid(
+            path,
+            "scene",
+            "solver.restitution_threshold",
+            format!("must be a finite speed >= 0, got {t}"),
+        ));
     }
     for (field, v) in [("solver.correction", s.correction), ("solver.slop", s.slop)] {
         if !(0.0..=1.0).contains(&v) {

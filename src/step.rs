@@ -26,6 +26,31 @@ pub struct Params {
     /// Largest correction per step, as a fraction of the thinner body's thickness: a wrong
     /// normal must not throw a body across the scene (§2.6).
     pub max_correction: Scalar,
+    /// Approach speed [m/s] above which a contact is an impact that bounces (`resolve`); below
+    /// it the contact rests (`solve`). `None`: 2|g|·dt, the speed gravity alone gives in two
+    /// steps, so resting bodies never hop, and zero without gravity.
+    pub restitution_threshold: Option<Scalar>,
+    /// Iterations of the resting-contact solver (`solve`).
+    pub iterations: u32,
+    /// Distance within which two bodies count as in resting contact though apart, as a fraction
+    /// of the thinner one's thickness: `prune` keeps such pairs and `solve` holds them
+    /// (speculatively), so a stack does not lose a contact to a micro-bounce.
+    pub contact_margin: Scalar,
+}
+
+impl Params {
+    /// True when `solve` holds contacts of a pair with this friction: under gravity all of
+    /// them, otherwise only those with friction.
+    #[must_use]
+    pub fn resting_contacts(&self, dt: Scalar, friction: Scalar) -> bool {
+        self.restitution_threshold(dt) > 0.0 || friction > 0.0
+    }
+
+    /// The restitution threshold in force for time step `dt` [m/s].
+    #[must_use]
+    pub fn restitution_threshold(&self, dt: Scalar) -> Scalar {
+        self.restitution_threshold.unwrap_or(2.0 * self.gravity.length() * dt)
+    }
 }
 
 impl Default for Params {
@@ -34,8 +59,11 @@ impl Default for Params {
             gravity: Vector::new(0.0, -9.81, 0.0),
             max_sweeps: 20,
             correction: 0.4,
-            slop: 0.005,
+            slop: 0.0005,
             max_correction: 0.2,
+            restitution_threshold: None,
+            iterations: 30,
+            contact_margin: 0.02,
         }
     }
 }
@@ -136,11 +164,101 @@ pub struct CullScratch {
     pub chunks: Vec<Vec<(u32, u32)>>,
 }
 
+/// One manifold point as the contact solver (`solve`) sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolverRow {
+    /// Body A (lower index).
+    pub a: u32,
+    /// Body B.
+    pub b: u32,
+    /// The test that found the pair's contact; `None` for a near pair held speculatively.
+    pub feature: Option<Feature>,
+    /// Point relative to A's and B's centres of mass [m].
+    pub r_a: Vector,
+    /// See `r_a`.
+    pub r_b: Vector,
+    /// The point in A's body frame, to match it next step.
+    pub local: Vector,
+    /// Contact normal, from B to A.
+    pub n: Vector,
+    /// First tangent.
+    pub t1: Vector,
+    /// Second tangent.
+    pub t2: Vector,
+    /// Effective masses along n, t1, t2 [kg].
+    pub k_n: Scalar,
+    /// See `k_n`.
+    pub k_t1: Scalar,
+    /// See `k_n`.
+    pub k_t2: Scalar,
+    /// Friction coefficient of the pair.
+    pub mu: Scalar,
+    /// Gap at the point when the step began [m]: > 0 apart (speculative), < 0 penetrating.
+    pub gap: Scalar,
+    /// Accumulated normal impulse [N·s], ≥ 0.
+    pub jn: Scalar,
+    /// Accumulated friction impulses along t1, t2 [N·s].
+    pub jt1: Scalar,
+    /// See `jt1`.
+    pub jt2: Scalar,
+}
+
+/// A point's impulses kept for the next step's warm start.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CachedPoint {
+    /// The point in A's body frame [m].
+    pub local: Vector,
+    /// Normal impulse [N·s].
+    pub normal: Scalar,
+    /// Friction impulse, world frame [N·s].
+    pub tangent: Vector,
+}
+
+/// A pair's cached points (at most `manifold::MAX_POINTS`), without a heap allocation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CachedManifold {
+    /// The points; the first `len` are valid.
+    pub points: [CachedPoint; crate::manifold::MAX_POINTS],
+    /// How many.
+    pub len: usize,
+}
+
+impl CachedManifold {
+    /// The valid points.
+    #[must_use]
+    pub fn points(&self) -> &[CachedPoint] {
+        &self.points[..self.len]
+    }
+}
+
+/// Reused buffers of the contact solver (`solve`), and its warm-start cache, the one piece of
+/// state that lives from one step to the next (impulses only: it changes how fast the solver
+/// converges, never which contacts exist).
+#[derive(Clone, Debug, Default)]
+pub struct SolveScratch {
+    /// The pairs solved this step, in pair order.
+    pub pairs: Vec<Pair>,
+    /// Their manifolds.
+    pub manifolds: Vec<crate::manifold::Manifold>,
+    /// Whether each pair is near but untouched (no test found it).
+    pub near: Vec<bool>,
+    /// One row per manifold point.
+    pub rows: Vec<SolverRow>,
+    /// Last step's impulses by pair (looked up, never iterated, so hashing order is harmless).
+    pub cache: std::collections::HashMap<(u32, u32), CachedManifold>,
+    /// The step these rows belong to (`correct` uses them only if `solve` ran this step).
+    pub step: u64,
+    /// Pseudo-velocities (linear, angular) of `correct`'s split impulses, by body.
+    pub pseudo: Vec<(Vector, Vector)>,
+}
+
 /// Reused allocations of the shipped systems.
 #[derive(Clone, Debug, Default)]
 pub struct Scratch {
     /// For `cull`.
     pub cull: CullScratch,
+    /// For `solve`.
+    pub solve: SolveScratch,
 }
 
 /// Everything a system may read or write besides the world (DESIGN.md §4).
@@ -193,9 +311,18 @@ impl StepContext {
     /// Poses every body that appears in a `Candidate` pair and was not posed since it last
     /// moved. Detectors call it first; the second call in a step finds nothing to do.
     pub fn pose_candidates(&mut self) {
+        self.pose_pairs(Pair::is_candidate);
+    }
+
+    /// Poses every body of a pair that has a contact (for systems after the detectors).
+    pub fn pose_contacts(&mut self) {
+        self.pose_pairs(|p| p.contact().is_some());
+    }
+
+    fn pose_pairs(&mut self, want: impl Fn(&Pair) -> bool) {
         let cache = &mut self.posed;
         cache.wanted.iter_mut().for_each(|w| *w = false);
-        for p in self.pairs.iter().filter(|p| p.is_candidate()) {
+        for p in self.pairs.iter().filter(|p| want(p)) {
             cache.wanted[p.a as usize] = true;
             cache.wanted[p.b as usize] = true;
         }

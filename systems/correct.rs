@@ -22,10 +22,14 @@ pub fn correction(depth: Scalar, thickness: Scalar, params: &Params) -> Scalar {
 /// - Paper: none (the paper leaves overlaps in place: E14); PHYSICS.md §2.6.
 /// - Cost: O(C) for C contacts.
 pub fn correct(world: &mut World, ctx: &mut StepContext) {
+    let held = ctx.scratch.solve.step == ctx.step && !ctx.scratch.solve.rows.is_empty();
     let mut moved = false;
     for k in 0..ctx.pairs.len() {
         let pair = ctx.pairs[k];
         let Some(contact) = pair.contact() else { continue };
+        if held && ctx.scratch.solve.pairs.binary_search_by_key(&(pair.a, pair.b), |p| (p.a, p.b)).is_ok() {
+            continue; // held by `solve`: corrected below, at its manifold points
+        }
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let b = &ctx.bodies;
         let (wa, wb) = (b.inv_mass[ia], b.inv_mass[ib]);
@@ -41,8 +45,52 @@ pub fn correct(world: &mut World, ctx: &mut StepContext) {
         ctx.mark_moved(ib);
         moved = true;
     }
+    if held {
+        split_impulses(ctx);
+        moved = true;
+    }
     if moved {
         ctx.bodies.store(world);
+    }
+}
+
+/// Removes penetration at `solve`'s manifold points with split impulses (Catto's "split
+/// impulse"; Bullet): impulses on separate pseudo-velocities, clamped like contact impulses,
+/// turned into a displacement and a rotation over one step and then dropped. The real
+/// velocities never see them, so resting bodies neither gain energy nor pop apart, and a
+/// tilted box is turned back flat rather than only pushed up at one corner.
+fn split_impulses(ctx: &mut StepContext) {
+    let (dt, beta, slop) = (ctx.dt, ctx.params.correction, ctx.params.slop);
+    let n = ctx.bodies.len();
+    let s = &mut ctx.scratch.solve;
+    s.pseudo.clear();
+    s.pseudo.resize(n, (Vector::ZERO, Vector::ZERO));
+    let b = &ctx.bodies;
+    let mut lambda = vec![0.0; s.rows.len()];
+    for _ in 0..ctx.params.iterations {
+        for (row, acc) in s.rows.iter().zip(&mut lambda) {
+            let (ia, ib) = (row.a as usize, row.b as usize);
+            let thin = ctx.meshes.get(b.mesh[ia]).thickness.min(ctx.meshes.get(b.mesh[ib]).thickness);
+            let target = beta * (-row.gap - slop * thin).max(0.0) / dt;
+            let ((va, wa), (vb, wb)) = (s.pseudo[ia], s.pseudo[ib]);
+            let u = (va + wa.cross(row.r_a) - vb - wb.cross(row.r_b)).dot(row.n);
+            let next = (*acc + (target - u) * row.k_n).max(0.0);
+            let p = row.n * (next - *acc);
+            *acc = next;
+            s.pseudo[ia].0 += p * b.inv_mass[ia];
+            s.pseudo[ia].1 += b.inv_inertia_world[ia] * row.r_a.cross(p);
+            s.pseudo[ib].0 -= p * b.inv_mass[ib];
+            s.pseudo[ib].1 -= b.inv_inertia_world[ib] * row.r_b.cross(p);
+        }
+    }
+    for i in 0..n {
+        let (v, w) = ctx.scratch.solve.pseudo[i];
+        if v != Vector::ZERO || w != Vector::ZERO {
+            let b = &mut ctx.bodies;
+            b.position[i] += v * dt;
+            b.orientation[i] = (crate::math::exp_map(w * dt) * b.orientation[i]).normalize();
+            ctx.mark_moved(i);
+        }
     }
 }
 

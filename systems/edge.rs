@@ -46,7 +46,7 @@ pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
             }
             _ => None,
         };
-        let normal = crossing.unwrap_or_else(|| b.planes[b.max_plane_distance(point).1].normal);
+        let normal = crossing.unwrap_or_else(|| b.closest_face_normal(point, a.position - b.position));
         return Some(Contact { point, normal, depth: depth_along(a, b, normal), feature: Feature::Edge });
     }
     None

@@ -64,7 +64,7 @@ pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     }
     let point = sum_point / Scalar::from(count);
     let normal = if sum_normal.length() < CANCELLED_NORMAL * sum_area {
-        b.planes[b.max_plane_distance(point).1].normal
+        b.closest_face_normal(point, a.position - b.position)
     } else {
         -sum_normal.normalize()
     };

@@ -1,6 +1,7 @@
 //! `integrate`: advances velocities and poses by one step (PHYSICS.md §2.7, errata E15, E16).
 //!
-//! Linear: semi-implicit (symplectic) Euler, `v += g·dt; x += v·dt`.
+//! Linear: semi-implicit (symplectic) Euler: `gravity` did `v += g·dt` before the contacts,
+//! this does `x += v·dt`.
 //! Angular: torque-free, so the world angular momentum L is constant; the orientation moves by
 //! the symplectic splitting of §2.7 with L fixed, and ω is recomputed from L at the new
 //! orientation. (The midpoint scheme is also correct but drifts the flip times of §4 (e) by
@@ -46,22 +47,21 @@ pub fn rotate_free(q: Quat, omega: Vector, axes: Quat, moments: Vector, dt: Scal
 
 /// Advances every non-fixed body; fixed bodies never move.
 ///
-/// - Reads: `ctx.bodies`, `ctx.dt`, `ctx.params.gravity`.
+/// - Reads: `ctx.bodies`, `ctx.dt`.
 /// - Writes: `ctx.bodies` poses, velocities, world inverse inertia (and the world's); marks
 ///   every body for re-posing.
 /// - Paper: integration; PHYSICS.md §2.7, errata E15, E16.
 /// - Cost: O(N), in parallel, each row written by one thread.
 pub fn integrate(world: &mut World, ctx: &mut StepContext) {
-    let (dt, g) = (ctx.dt, ctx.params.gravity);
+    let dt = ctx.dt;
     let b = &mut ctx.bodies;
-    let rows = b.position.par_iter_mut().zip(b.orientation.par_iter_mut()).zip(b.velocity.par_iter_mut());
+    let rows = b.position.par_iter_mut().zip(b.orientation.par_iter_mut()).zip(b.velocity.par_iter());
     let rest = b.angular_velocity.par_iter_mut().zip(b.inv_inertia_world.par_iter_mut()).zip(b.rotation.par_iter_mut());
     let fixed = (&b.inv_mass, &b.principal_axes, &b.principal_moments, &b.inv_inertia_body);
     rows.zip(rest).enumerate().for_each(|(i, (((x, q), v), ((w, inv_w), rotation)))| {
         if fixed.0[i] == 0.0 {
             return;
         }
-        *v += g * dt;
         *x += *v * dt;
         (*q, *w) = rotate_free(*q, *w, fixed.1[i], fixed.2[i], dt);
         *inv_w = rotate_tensor(*q, fixed.3[i]);

@@ -8,26 +8,33 @@
 //! 3. `face` — triangle centroids inside the other body (§1.3, errata E2, E3).
 //! 4. `vertex` — vertices inside the other body (§1.4, E5).
 //! 5. `edge` — edges crossing the other body (§1.5, E4). First hit wins per pair (§1.6, E6).
-//! 6. `resolve` — impulse sweeps over the contacts (§2.5, errata E9–E13).
-//! 7. `correct` — positional correction of penetration (§2.6, E14).
-//! 8. `integrate` — velocities then poses; angular momentum kept (§2.7, E15, E16).
+//! 6. `gravity` — external forces change velocities (semi-implicit Euler, first half).
+//! 7. `resolve` — impulse sweeps over the impacts (§2.5, errata E9–E13).
+//! 8. `solve` — resting contact and friction: manifolds, clamped accumulated impulses,
+//!    warm starting (the paper's future work; idle without gravity and friction).
+//! 9. `correct` — positional correction of penetration (§2.6, E14).
+//! 10. `integrate` — poses from velocities; angular momentum kept (§2.7, E15, E16).
 
 mod correct;
 mod cull;
 mod edge;
 mod face;
+mod gravity;
 mod integrate;
 mod prune;
 mod resolve;
+mod solve;
 mod vertex;
 
 pub use correct::{correct, correction};
 pub use cull::{cull, cull_all_pairs, spheres_overlap};
 pub use edge::{edge, edge_contact};
 pub use face::{face, face_contact};
+pub use gravity::gravity;
 pub use integrate::{integrate, rotate_free};
 pub use prune::{prune, separated};
-pub use resolve::{BodyState, collision_impulse, resolve};
+pub use resolve::{BodyState, approach_speed, collision_impulse, resolve};
+pub use solve::solve;
 pub use vertex::{vertex, vertex_contact};
 
 use crate::error::ScheduleError;
@@ -42,13 +49,16 @@ pub const REGISTRY: &[System] = &[
     System { name: "face", run: face },
     System { name: "vertex", run: vertex },
     System { name: "edge", run: edge },
+    System { name: "gravity", run: gravity },
     System { name: "resolve", run: resolve },
+    System { name: "solve", run: solve },
     System { name: "correct", run: correct },
     System { name: "integrate", run: integrate },
 ];
 
 /// The default order (see the module docs).
-pub const DEFAULT_ORDER: &[&str] = &["cull", "prune", "face", "vertex", "edge", "resolve", "correct", "integrate"];
+pub const DEFAULT_ORDER: &[&str] =
+    &["cull", "prune", "face", "vertex", "edge", "gravity", "resolve", "solve", "correct", "integrate"];
 
 /// The shipped system called `name`.
 pub fn find(name: &str) -> Result<System, ScheduleError> {
@@ -64,7 +74,8 @@ pub fn schedule_of<S: AsRef<str>>(names: &[S]) -> Result<Schedule, ScheduleError
     Schedule::new(systems)
 }
 
-/// The default schedule: `cull, prune, face, vertex, edge, resolve, correct, integrate`.
+/// The default schedule: `cull, prune, face, vertex, edge, gravity, resolve, solve, correct,
+/// integrate`.
 #[must_use]
 pub fn default_schedule() -> Schedule {
     schedule_of(DEFAULT_ORDER).expect("the registry holds every default name once")

@@ -2,9 +2,12 @@
 //! early-out that keeps the paper's three tests as the deciders of every contact, because none
 //! of them can fire on a pair it removes (proof on `separated`).
 
-use crate::contact::PairState;
+use crate::bodies::Bodies;
+use crate::contact::{Pair, PairState};
 use crate::geometry::Posed;
 use crate::math::{Mat3, Scalar, Vector};
+use crate::mesh::MeshTable;
+use crate::step::Params;
 use crate::step::StepContext;
 use hecs::World;
 use rayon::prelude::*;
@@ -28,9 +31,11 @@ const PARALLEL_SLACK: Scalar = 1e-9;
 /// every vertex of one lies beyond the other's projection, so no centroid, vertex or edge
 /// point of either (convex combinations of vertices) is inside the other: the face, vertex
 /// and edge tests all return none.
+///
+/// `margin` [m] must be at least `PRUNE_MARGIN · (r_a + r_b)`; `prune` widens it to the contact
+/// margin for pairs that may rest on each other.
 #[must_use]
-pub fn separated(a: &Posed, b: &Posed) -> bool {
-    let margin = PRUNE_MARGIN * (a.mesh.radius + b.mesh.radius);
+pub fn separated(a: &Posed, b: &Posed, margin: Scalar) -> bool {
     let apart_on = |axis: Vector| {
         let (lo_a, hi_a) = extent(a, axis);
         let (lo_b, hi_b) = extent(b, axis);
@@ -99,6 +104,20 @@ pub fn boxes_separated(a: &BoxPose, b: &BoxPose, margin: Scalar) -> bool {
     false
 }
 
+/// The margin a pair must be apart by to be dropped [m]: the proof margin, widened to the
+/// contact margin for pairs that may rest on each other, so `solve` still sees them while
+/// apart by less (a micro-bounce must not lose a stack's contact).
+fn pair_margin(p: &Pair, b: &Bodies, meshes: &MeshTable, params: &Params, dt: Scalar) -> Scalar {
+    let (ia, ib) = (p.a as usize, p.b as usize);
+    let proof = PRUNE_MARGIN * (b.radius[ia] + b.radius[ib]);
+    if params.resting_contacts(dt, 0.5 * (b.friction[ia] + b.friction[ib])) {
+        let thin = meshes.get(b.mesh[ia]).thickness.min(meshes.get(b.mesh[ib]).thickness);
+        proof.max(params.contact_margin * thin)
+    } else {
+        proof
+    }
+}
+
 /// The interval of `p`'s vertices projected on `axis`.
 fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
     p.vertices.iter().fold((Scalar::INFINITY, Scalar::NEG_INFINITY), |(lo, hi), v| {
@@ -118,7 +137,8 @@ fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
 /// - Cost: O(1) per box pair; otherwise O(V_A + V_B) per axis tried, at most
 ///   1 + P_A + P_B + 64 axes per pair, with early exits.
 pub fn prune(_world: &mut World, ctx: &mut StepContext) {
-    let (b, meshes) = (&ctx.bodies, &ctx.meshes);
+    let (b, meshes, params, dt) = (&ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
+    let margin = |p: &Pair| pair_margin(p, b, meshes, params, dt);
     let as_box = |i: u32| {
         let i = i as usize;
         meshes.get(b.mesh[i]).box_half_extents.map(|half| BoxPose {
@@ -128,19 +148,19 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         })
     };
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate()).for_each(|pair| {
-        if let (Some(ba), Some(bb)) = (as_box(pair.a), as_box(pair.b)) {
-            let margin = PRUNE_MARGIN * (b.radius[pair.a as usize] + b.radius[pair.b as usize]);
-            if boxes_separated(&ba, &bb, margin) {
-                pair.state = PairState::Separated;
-            }
+        if let (Some(ba), Some(bb)) = (as_box(pair.a), as_box(pair.b))
+            && boxes_separated(&ba, &bb, margin(pair))
+        {
+            pair.state = PairState::Separated;
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
     ctx.pose_candidates();
-    let (posed, meshes, b) = (&ctx.posed, &ctx.meshes, &ctx.bodies);
+    let (posed, meshes, b, params, dt) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params, ctx.dt);
+    let margin = |p: &Pair| pair_margin(p, b, meshes, params, dt);
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|pair| {
-        if separated(posed.get(pair.a), posed.get(pair.b)) {
+        if separated(posed.get(pair.a), posed.get(pair.b), margin(pair)) {
             pair.state = PairState::Separated;
         }
     });
@@ -162,12 +182,13 @@ mod tests {
     /// Both forms of the test on two unit cubes; asserts they agree and returns the answer.
     fn apart(a: Pose, b: Pose) -> bool {
         let mesh = Arc::new(ConvexMesh::cuboid(Vector::ONE));
-        let generic = separated(&Posed::new(Arc::clone(&mesh), &a), &Posed::new(mesh, &b));
+        let margin = PRUNE_MARGIN * 3f64.sqrt();
+        let generic = separated(&Posed::new(Arc::clone(&mesh), &a), &Posed::new(mesh, &b), margin);
         let half = Vector::splat(0.5);
         let boxes = boxes_separated(
             &BoxPose { position: a.position, rotation: Mat3::from_quat(a.orientation), half },
             &BoxPose { position: b.position, rotation: Mat3::from_quat(b.orientation), half },
-            PRUNE_MARGIN * 3f64.sqrt(),
+            margin,
         );
         assert_eq!(generic, boxes, "{a:?} {b:?}");
         generic

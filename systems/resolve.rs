@@ -5,6 +5,10 @@
 //! current velocities, and sweeps repeat until one applies no impulse or `max_sweeps` is
 //! reached. This is the "pairwise sequential" model of PHYSICS.md §4 (g): a Newton's cradle of
 //! touching cubes ends (0, 0, 0, 0, 1). A pair's restitution is the mean of its two actors'.
+//!
+//! These are impacts: only contacts approaching faster than the restitution threshold get
+//! one (2|g|·dt by default: zero without gravity, so the paper's model is unchanged there).
+//! Slower ones are resting contacts, which `solve` holds without bouncing.
 
 use crate::contact::{Contact, PairState};
 use crate::math::{Mat3, Scalar, Vector};
@@ -40,6 +44,12 @@ impl BodyState {
     }
 }
 
+/// How fast the bodies approach at the contact, `−u_n` [m/s] (negative when separating).
+#[must_use]
+pub fn approach_speed(a: &BodyState, b: &BodyState, contact: &Contact) -> Scalar {
+    -(a.point_velocity(contact.point) - b.point_velocity(contact.point)).dot(contact.normal)
+}
+
 /// The impulse magnitude j ≥ 0 on A along the contact normal, or `None` when the bodies do not
 /// approach at the contact (E13):
 ///
@@ -70,6 +80,7 @@ pub fn collision_impulse(a: &BodyState, b: &BodyState, contact: &Contact, restit
 /// - Paper: collision resolution; PHYSICS.md §2.5, errata E9–E13.
 /// - Cost: O(C) per sweep for C contacts, at most `max_sweeps` sweeps.
 pub fn resolve(world: &mut World, ctx: &mut StepContext) {
+    let threshold = ctx.params.restitution_threshold(ctx.dt);
     let mut any = false;
     for sweep in 1..=ctx.params.max_sweeps {
         let mut applied = false;
@@ -80,6 +91,9 @@ pub fn resolve(world: &mut World, ctx: &mut StepContext) {
             let b = &mut ctx.bodies;
             let (mut sa, mut sb) = (state(b, ia), state(b, ib));
             let e = 0.5 * (b.restitution[ia] + b.restitution[ib]);
+            if approach_speed(&sa, &sb, &contact) <= threshold {
+                continue;
+            }
             let Some(j) = collision_impulse(&sa, &sb, &contact, e) else { continue };
             sa.apply_impulse(contact.point, j * contact.normal);
             sb.apply_impulse(contact.point, -j * contact.normal);
@@ -101,7 +115,9 @@ pub fn resolve(world: &mut World, ctx: &mut StepContext) {
     }
 }
 
-fn state(b: &crate::bodies::Bodies, i: usize) -> BodyState {
+/// Row `i` of the snapshot as a `BodyState`.
+#[must_use]
+pub fn state(b: &crate::bodies::Bodies, i: usize) -> BodyState {
     BodyState {
         position: b.position[i],
         velocity: b.velocity[i],

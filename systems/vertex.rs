@@ -25,21 +25,21 @@ pub fn vertex(_world: &mut World, ctx: &mut StepContext) {
 pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let eps = b.tolerance();
     let (mut sum, mut count) = (Vector::ZERO, 0_u32);
-    let mut deepest = (Scalar::INFINITY, 0);
+    let mut deepest = (Scalar::INFINITY, Vector::ZERO);
     for &v in &a.vertices {
-        let (s, f) = b.max_plane_distance(v);
+        let (s, _) = b.max_plane_distance(v);
         if s <= eps {
             sum += v;
             count += 1;
             if s < deepest.0 {
-                deepest = (s, f);
+                deepest = (s, v);
             }
         }
     }
     if count == 0 {
         return None;
     }
-    let normal = b.planes[deepest.1].normal;
+    let normal = b.closest_face_normal(deepest.1, a.position - b.position);
     Some(Contact {
         point: sum / Scalar::from(count),
         normal,

@@ -170,7 +170,7 @@ fn a_scene_that_blows_up_is_stopped_by_the_nan_guard_and_keeps_its_last_finite_s
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("step 2") && err.contains("'integrate'") && err.contains("'rocket'") && err.contains("velocity"),
+        err.contains("step 2") && err.contains("'gravity'") && err.contains("'rocket'") && err.contains("velocity"),
         "{err}"
     );
     let v: serde_json::Value =

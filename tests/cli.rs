@@ -26,7 +26,7 @@ fn write(dir: &tempfile::TempDir, name: &str, contents: &str) -> String {
 fn systems_prints_the_default_order() {
     let o = rigid(&["systems"]);
     assert!(o.status.success());
-    assert_eq!(text(&o).0, "cull\nprune\nface\nvertex\nedge\nresolve\ncorrect\nintegrate\n");
+    assert_eq!(text(&o).0, "cull\nprune\nface\nvertex\nedge\ngravity\nresolve\nsolve\ncorrect\nintegrate\n");
 }
 
 #[test]

@@ -22,7 +22,10 @@ fn freeze(world: &mut hecs::World, ctx: &mut StepContext) {
 #[test]
 fn default_order_is_the_papers() {
     let names = systems::default_schedule().names();
-    assert_eq!(names, ["cull", "prune", "face", "vertex", "edge", "resolve", "correct", "integrate"]);
+    assert_eq!(
+        names,
+        ["cull", "prune", "face", "vertex", "edge", "gravity", "resolve", "solve", "correct", "integrate"]
+    );
 }
 
 #[test]
@@ -34,7 +37,19 @@ fn insert_replace_remove_by_name() {
     s.remove("prune").expect("prune exists");
     assert_eq!(
         s.names(),
-        ["cull_all_pairs", "census", "face", "vertex", "edge", "resolve", "correct", "integrate", "freeze"]
+        [
+            "cull_all_pairs",
+            "census",
+            "face",
+            "vertex",
+            "edge",
+            "gravity",
+            "resolve",
+            "solve",
+            "correct",
+            "integrate",
+            "freeze"
+        ]
     );
 }
 
