@@ -42,6 +42,9 @@ pub enum AppError {
         /// Steps completed.
         step: u64,
     },
+    /// A command line the argument parser cannot judge alone (exit 2).
+    #[error("{0}")]
+    Usage(String),
     /// The thread pool could not start (exit 1).
     #[error("cannot start {threads} worker threads: {reason}")]
     Threads {
@@ -57,7 +60,7 @@ impl AppError {
     #[must_use]
     pub fn exit_code(&self) -> i32 {
         match self {
-            Self::Scene(_) | Self::Snapshot(_) => 2,
+            Self::Scene(_) | Self::Snapshot(_) | Self::Usage(_) => 2,
             Self::Interrupted { .. } => 130,
             _ => 1,
         }
@@ -287,30 +290,48 @@ fn check(path: &Path) -> Result<(), AppError> {
 }
 
 fn bench(args: &BenchArgs) -> Result<(), AppError> {
+    use crate::bench::BenchScene;
     let threads = rayon::current_num_threads();
-    let mut actors = args.actors.clone();
-    actors.sort_unstable();
+    let (scene, mut sizes) = match args.scene.as_str() {
+        "pyramid" => (BenchScene::Pyramid, args.base.clone()),
+        "rain" => (BenchScene::Rain, args.actors.clone()),
+        _ => (BenchScene::BoxGas, args.actors.clone()),
+    };
+    if sizes.is_empty() {
+        let flag = if scene == BenchScene::Pyramid { "--base" } else { "--actors" };
+        return Err(AppError::Usage(format!("bench {}: give {flag} N[,N...]", scene.name())));
+    }
+    sizes.sort_unstable();
+    let gas = scene == BenchScene::BoxGas;
+    let steps = args.steps.unwrap_or(if gas { 200 } else { 600 });
+    let warmup = args.warmup.unwrap_or(if gas { 20 } else { 0 });
     let mut rows = Vec::new();
     if !args.json {
         println!(
-            "{:>8} {:>8} {:>12} {:>12} {:>14} {:>14} {:>8} {:>10}",
-            "actors", "threads", "mean ms", "median ms", "ke start", "ke end", "escaped", "rss MiB"
+            "{:>8} {:>8} {:>12} {:>12} {:>14} {:>14} {:>12} {:>10}",
+            "actors", "threads", "mean ms", "median ms", "ke start", "ke end", "check", "rss MiB"
         );
     }
-    for n in actors {
-        let r = crate::bench::run_box_gas(n, args.steps, args.warmup, args.seed, threads)?;
+    for size in sizes {
+        let r = crate::bench::run(scene, size, steps, warmup, args.seed, threads)?;
         if args.json {
             println!("{}", serde_json::to_string(&r).expect("plain data serialises"));
         } else {
+            let check = match (r.escaped, r.max_displacement_m, r.outside) {
+                (Some(e), _, _) => format!("{e} escaped"),
+                (_, Some(d), _) => format!("{d:.4} m moved"),
+                (_, _, Some(o)) => format!("{o} outside"),
+                _ => String::new(),
+            };
             println!(
-                "{:>8} {:>8} {:>12.3} {:>12.3} {:>14.4} {:>14.4} {:>8} {:>10.1}",
+                "{:>8} {:>8} {:>12.3} {:>12.3} {:>14.4} {:>14.4} {:>12} {:>10.1}",
                 r.actors,
                 r.threads,
                 r.mean_ms_per_step,
                 r.median_ms_per_step,
                 r.ke_start,
                 r.ke_end,
-                r.escaped,
+                check,
                 r.peak_rss_mib
             );
             let parts: Vec<String> = r.systems_ms.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
@@ -320,11 +341,12 @@ fn bench(args: &BenchArgs) -> Result<(), AppError> {
     }
     if let Some(path) = &args.csv {
         let mut csv = String::from(
-            "scene,actors,threads,steps,mean_ms_per_step,median_ms_per_step,ke_start,ke_end,escaped,peak_rss_mib\n",
+            "scene,actors,threads,steps,mean_ms_per_step,median_ms_per_step,ke_start,ke_end,escaped,max_displacement_m,outside,peak_rss_mib\n",
         );
+        let opt = |v: Option<String>| v.unwrap_or_default();
         for r in &rows {
             csv += &format!(
-                "{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 r.scene,
                 r.actors,
                 r.threads,
@@ -333,7 +355,9 @@ fn bench(args: &BenchArgs) -> Result<(), AppError> {
                 r.median_ms_per_step,
                 r.ke_start,
                 r.ke_end,
-                r.escaped,
+                opt(r.escaped.map(|v| v.to_string())),
+                opt(r.max_displacement_m.map(|v| v.to_string())),
+                opt(r.outside.map(|v| v.to_string())),
                 r.peak_rss_mib
             );
         }

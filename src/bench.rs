@@ -1,23 +1,60 @@
-//! The `rigid bench` driver (BENCHMARKS.md): builds the box-gas scene, warms up, times the
-//! schedule's steps, and reports per N as a table row or a JSON line.
+//! The `rigid bench` driver (BENCHMARKS.md): builds a benchmark scene, warms up, times the
+//! schedule's steps, and reports per size as a table row or a JSON line.
 
 use crate::build::spawn_all;
 use crate::math::Vector;
 use crate::schedule::StepProfile;
 use crate::sim::Sim;
-use crate::spawners::{box_gas, box_gas_half_extent};
+use crate::spawners::{Instance, box_gas, box_gas_half_extent};
+use crate::stacks::{pyramid, rain, rain_half_width};
 use crate::step::Params;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Duration;
+
+/// The benchmark scenes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchScene {
+    /// Unit cubes in a closed box, no gravity, e = 1 (size = cubes).
+    BoxGas,
+    /// A pyramid of cubes on the ground (size = cubes in the base row).
+    Pyramid,
+    /// Cubes dropped into an open box (size = cubes).
+    Rain,
+}
+
+impl BenchScene {
+    /// The scene's name in output.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::BoxGas => "box-gas",
+            Self::Pyramid => "pyramid",
+            Self::Rain => "rain",
+        }
+    }
+
+    /// The actors of the scene of this size, and how many fixed ones come first (box-gas puts
+    /// its walls last, the others their ground first, as the peer harness does).
+    fn instances(self, size: u32, seed: u64) -> (Vec<Instance>, usize) {
+        match self {
+            Self::BoxGas => (box_gas(size, seed), 0),
+            Self::Pyramid => (pyramid(size), 1),
+            Self::Rain => (rain(size, seed), 5),
+        }
+    }
+}
 
 /// What one benchmark run measured.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct BenchResult {
     /// Scene name.
     pub scene: &'static str,
-    /// Number of cubes.
+    /// Number of free cubes.
     pub actors: u32,
+    /// Pyramid only: cubes in the base row.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base: Option<u32>,
     /// Timed steps.
     pub steps: u64,
     /// Untimed warm-up steps.
@@ -26,6 +63,8 @@ pub struct BenchResult {
     pub seed: u64,
     /// Worker threads.
     pub threads: usize,
+    /// Sleeping of resting bodies (the sandbox has none: always false).
+    pub sleep: bool,
     /// Mean wall time of the schedule per timed step [ms].
     pub mean_ms_per_step: f64,
     /// Median of the same [ms].
@@ -34,10 +73,17 @@ pub struct BenchResult {
     pub ke_start: f64,
     /// Kinetic energy after warm-up and timed steps [J].
     pub ke_end: f64,
-    /// Cubes whose centre ended outside the box's inner half-extent.
-    pub escaped: usize,
-    /// Peak resident memory of the process so far [MiB] (runs go in ascending N, so each
-    /// row's value is its own peak as long as N only grows).
+    /// Box-gas: cubes whose centre ended outside the box's inner half-extent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub escaped: Option<usize>,
+    /// Pyramid: largest distance of any cube centre from its start [m].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_displacement_m: Option<f64>,
+    /// Rain: cubes whose centre ended outside the container (or below the floor).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outside: Option<usize>,
+    /// Peak resident memory of the process so far [MiB] (runs go in ascending size, so each
+    /// row's value is its own peak as long as sizes only grow).
     pub peak_rss_mib: f64,
     /// Mean candidate pairs per timed step (broad-phase output).
     pub candidates_per_step: f64,
@@ -51,22 +97,32 @@ pub struct BenchResult {
 /// dt = 1/60, the default schedule.
 #[must_use]
 pub fn box_gas_sim(n: u32, seed: u64) -> Sim {
-    let params = Params { gravity: Vector::ZERO, ..Params::default() };
-    let mut sim = Sim::new(1.0 / 60.0, params, crate::systems::default_schedule());
-    spawn_all(&mut sim, &box_gas(n, seed), Path::new("box-gas")).expect("the box-gas scene is valid");
+    scene_sim(BenchScene::BoxGas, n, seed)
+}
+
+/// A benchmark scene as a simulation: dt = 1/60, gravity −9.81 but none for box-gas.
+#[must_use]
+pub fn scene_sim(scene: BenchScene, size: u32, seed: u64) -> Sim {
+    let gravity = if scene == BenchScene::BoxGas { Vector::ZERO } else { Vector::new(0.0, -9.81, 0.0) };
+    let mut sim = Sim::new(1.0 / 60.0, Params { gravity, ..Params::default() }, crate::systems::default_schedule());
+    spawn_all(&mut sim, &scene.instances(size, seed).0, Path::new(scene.name())).expect("benchmark scenes are valid");
     sim
 }
 
-/// Runs box-gas with `n` cubes: `warmup` untimed steps, then `steps` timed ones. Call it
-/// inside the rayon pool of the wanted thread count.
-pub fn run_box_gas(
-    n: u32,
+/// Runs a benchmark scene: `warmup` untimed steps, then `steps` timed ones. Call it inside the
+/// rayon pool of the wanted thread count.
+pub fn run(
+    scene: BenchScene,
+    size: u32,
     steps: u64,
     warmup: u64,
     seed: u64,
     threads: usize,
 ) -> Result<BenchResult, crate::error::StepError> {
-    let mut sim = box_gas_sim(n, seed);
+    let mut sim = scene_sim(scene, size, seed);
+    let fixed_first = scene.instances(0, seed).1;
+    let cubes = fixed_first..sim.len() - if scene == BenchScene::BoxGas { 6 } else { 0 };
+    let start: Vec<Vector> = sim.actors()[cubes.clone()].iter().map(|a| a.pose.position).collect();
     let ke_start = sim.totals().kinetic_energy;
     sim.run(warmup)?;
     let mut per_step = Vec::with_capacity(steps as usize);
@@ -84,29 +140,46 @@ pub fn run_box_gas(
         }
     }
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
-    let mean = per_step.iter().map(|d| ms(*d)).sum::<f64>() / steps.max(1) as f64;
+    let per = |x: f64| x / steps.max(1) as f64;
+    let mean = per(per_step.iter().map(|d| ms(*d)).sum::<f64>());
     per_step.sort_unstable();
     let median = per_step.get(per_step.len() / 2).map_or(0.0, |d| ms(*d));
-    let a = box_gas_half_extent(n);
-    // Cubes are rows 0..n of the snapshot (refreshed: with no steps it was never taken).
+    // The snapshot is refreshed: with no steps it was never taken.
     sim.ctx.bodies.load(&sim.world);
-    let escaped = sim.ctx.bodies.position[..n as usize].iter().filter(|x| x.abs().max_element() > a).count();
+    let end = &sim.ctx.bodies.position[cubes.clone()];
+    let (escaped, max_displacement_m, outside) = match scene {
+        BenchScene::BoxGas => {
+            let a = box_gas_half_extent(size);
+            (Some(end.iter().filter(|x| x.abs().max_element() > a).count()), None, None)
+        }
+        BenchScene::Pyramid => {
+            (None, Some(end.iter().zip(&start).map(|(x, x0)| (*x - *x0).length()).fold(0.0, f64::max)), None)
+        }
+        BenchScene::Rain => {
+            let a = rain_half_width(size);
+            (None, None, Some(end.iter().filter(|x| x.x.abs() > a || x.z.abs() > a || x.y < 0.0).count()))
+        }
+    };
     Ok(BenchResult {
-        scene: "box-gas",
-        actors: n,
+        scene: scene.name(),
+        actors: cubes.len() as u32,
+        base: (scene == BenchScene::Pyramid).then_some(size),
         steps,
         warmup,
         seed,
         threads,
+        sleep: false,
         mean_ms_per_step: mean,
         median_ms_per_step: median,
         ke_start,
         ke_end: sim.totals().kinetic_energy,
         escaped,
+        max_displacement_m,
+        outside,
         peak_rss_mib: peak_rss_mib(),
-        candidates_per_step: candidates as f64 / steps.max(1) as f64,
-        contacts_per_step: contacts as f64 / steps.max(1) as f64,
-        systems_ms: parts.into_iter().map(|(k, d)| (k, ms(d) / steps.max(1) as f64)).collect(),
+        candidates_per_step: per(candidates as f64),
+        contacts_per_step: per(contacts as f64),
+        systems_ms: parts.into_iter().map(|(k, d)| (k, per(ms(d)))).collect(),
     })
 }
 

@@ -148,18 +148,21 @@ impl Default for RunArgs {
 /// `rigid bench`.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Scene: `box-gas`.
-    #[arg(value_parser = ["box-gas"])]
+    /// Scene: `box-gas`, `pyramid` or `rain` (BENCHMARKS.md).
+    #[arg(value_parser = ["box-gas", "pyramid", "rain"])]
     pub scene: String,
-    /// Actor counts, comma-separated.
-    #[arg(long, value_delimiter = ',', required = true, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    /// Cube counts, comma-separated (box-gas, rain).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub actors: Vec<u32>,
-    /// Timed steps.
-    #[arg(long, default_value_t = 200, value_parser = parse_steps)]
-    pub steps: u64,
-    /// Untimed warm-up steps.
-    #[arg(long, default_value_t = 20, value_parser = parse_steps)]
-    pub warmup: u64,
+    /// Base rows, comma-separated (pyramid).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub base: Vec<u32>,
+    /// Timed steps (default 200 for box-gas, 600 for pyramid and rain).
+    #[arg(long, value_parser = parse_steps)]
+    pub steps: Option<u64>,
+    /// Untimed warm-up steps (default 20 for box-gas, 0 for pyramid and rain).
+    #[arg(long, value_parser = parse_steps)]
+    pub warmup: Option<u64>,
     /// Scene seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,

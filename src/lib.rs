@@ -60,6 +60,7 @@ pub mod shapes;
 pub mod sim;
 pub mod snapshot;
 pub mod spawners;
+pub mod stacks;
 pub mod step;
 pub mod warnings;
 

@@ -24,7 +24,7 @@ pub fn plot_svg(path: &Path, results: &[BenchResult]) -> Result<(), String> {
     let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(&e))?;
     let mut chart = ChartBuilder::on(&root)
-        .caption("rigid bench box-gas: time per step", ("sans-serif", 22))
+        .caption(format!("rigid bench {}: time per step", results.first().map_or("", |r| r.scene)), ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)

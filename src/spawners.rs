@@ -49,6 +49,19 @@ pub enum SpawnerDef {
         #[serde(default)]
         spin: Scalar,
     },
+    /// The pyramid benchmark scene of BENCHMARKS.md: `base` rows of unit cubes on a ground.
+    Pyramid {
+        /// Cubes in the bottom row.
+        base: u32,
+    },
+    /// The rain benchmark scene of BENCHMARKS.md: `actors` cubes dropped into an open box.
+    Rain {
+        /// Number of cubes.
+        actors: u32,
+        /// SplitMix64 seed (default 1).
+        #[serde(default = "one")]
+        seed: u64,
+    },
     /// The box-gas benchmark scene of BENCHMARKS.md: `actors` unit cubes in a closed box.
     BoxGas {
         /// Number of cubes.
@@ -106,6 +119,8 @@ impl SpawnerDef {
             Self::Grid { counts: (x, y, z), .. } => u64::from(*x) * u64::from(*y) * u64::from(*z),
             Self::Random { count, .. } => u64::from(*count),
             Self::BoxGas { actors, .. } => u64::from(*actors) + 6,
+            Self::Pyramid { base } => u64::from(*base) * (u64::from(*base) + 1) / 2 + 1,
+            Self::Rain { actors, .. } => u64::from(*actors) + 5,
         }
     }
 
@@ -131,7 +146,7 @@ impl SpawnerDef {
                 finite_nonneg("speed", *speed)?;
                 finite_nonneg("spin", *spin)
             }
-            Self::BoxGas { .. } => Ok(()),
+            Self::BoxGas { .. } | Self::Pyramid { .. } | Self::Rain { .. } => Ok(()),
         }
     }
 
@@ -176,6 +191,8 @@ impl SpawnerDef {
                     .collect()
             }
             Self::BoxGas { actors, seed } => box_gas(*actors, *seed),
+            Self::Pyramid { base } => crate::stacks::pyramid(*base),
+            Self::Rain { actors, seed } => crate::stacks::rain(*actors, *seed),
         }
     }
 }

@@ -60,7 +60,7 @@ pub fn correct(world: &mut World, ctx: &mut StepContext) {
 /// velocities never see them, so resting bodies neither gain energy nor pop apart, and a
 /// tilted box is turned back flat rather than only pushed up at one corner.
 fn split_impulses(ctx: &mut StepContext) {
-    let (dt, beta, slop) = (ctx.dt, ctx.params.correction, ctx.params.slop);
+    let (dt, beta, slop, cap) = (ctx.dt, ctx.params.correction, ctx.params.slop, ctx.params.max_correction);
     let n = ctx.bodies.len();
     let s = &mut ctx.scratch.solve;
     s.pseudo.clear();
@@ -71,7 +71,8 @@ fn split_impulses(ctx: &mut StepContext) {
         for (row, acc) in s.rows.iter().zip(&mut lambda) {
             let (ia, ib) = (row.a as usize, row.b as usize);
             let thin = ctx.meshes.get(b.mesh[ia]).thickness.min(ctx.meshes.get(b.mesh[ib]).thickness);
-            let target = beta * (-row.gap - slop * thin).max(0.0) / dt;
+            // Capped like the paper-pair correction: a wrong normal must not throw a body away.
+            let target = (beta * (-row.gap - slop * thin)).clamp(0.0, cap * thin) / dt;
             let ((va, wa), (vb, wb)) = (s.pseudo[ia], s.pseudo[ib]);
             let u = (va + wa.cross(row.r_a) - vb - wb.cross(row.r_b)).dot(row.n);
             let next = (*acc + (target - u) * row.k_n).max(0.0);

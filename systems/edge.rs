@@ -10,6 +10,10 @@ use hecs::World;
 /// Smallest |n_in × n_out| (unit normals) taken as two distinct planes; below it the edge
 /// passes through (nearly) parallel faces and the closest-face fallback gives the normal.
 const PARALLEL_PLANES: Scalar = 1e-9;
+/// The closest face wins over the edge-edge normal when penetration along the edge-edge normal
+/// is more than this many times the penetration along the face normal. In PHYSICS.md §4 (f2)
+/// the ratio is √2 (a true ridge crossing); a misread shallow contact gives 100 or more.
+const SHALLOW_FACE: Scalar = 2.0;
 
 /// Gives each remaining candidate pair an edge contact, testing both directions.
 ///
@@ -46,7 +50,18 @@ pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
             }
             _ => None,
         };
-        let normal = crossing.unwrap_or_else(|| b.closest_face_normal(point, a.position - b.position));
+        let toward = a.position - b.position;
+        let face = b.closest_face_normal(point, toward);
+        let normal = match crossing {
+            // The entry and exit planes meet in B's edge only if the segment passes near that
+            // edge. An edge of A lying just under a face of B (a box resting across two others,
+            // as in a pyramid) enters and leaves through two side faces whose common line is
+            // far away; the edge-edge normal is then horizontal with a depth of a whole body,
+            // while the face above is a hair away. Take the face when it is the clear minimum.
+            Some(n) if depth_along(a, b, n) > SHALLOW_FACE * depth_along(a, b, face) + b.tolerance() => face,
+            Some(n) => n,
+            None => face,
+        };
         return Some(Contact { point, normal, depth: depth_along(a, b, normal), feature: Feature::Edge });
     }
     None

@@ -1,0 +1,142 @@
+//! The resting-contact benchmark scenes of BENCHMARKS.md, built exactly as the peer harness
+//! builds them so both engines start from the same state: the `pyramid` of unit cubes on a
+//! ground slab, and the `rain` of cubes dropped into an open box.
+
+use crate::components::{Material, Pose, Velocity};
+use crate::math::{Scalar, Vector};
+use crate::rng::SplitMix64;
+use crate::scene::{MassSpec, ShapeDef};
+use crate::spawners::{Instance, uniform_rotation};
+
+/// A fixed box of the given full size at `position`.
+fn slab(name: String, size: Vector, position: Vector, material: Material) -> Instance {
+    Instance {
+        name,
+        shape: ShapeDef::Box { size: (size.x, size.y, size.z) },
+        mass: MassSpec::Density(1.0),
+        pose: Pose::from_position(position),
+        velocity: Velocity::default(),
+        material,
+        fixed: true,
+    }
+}
+
+/// A free unit cube of mass 1.
+fn cube(name: String, pose: Pose, material: Material) -> Instance {
+    Instance {
+        name,
+        shape: ShapeDef::Box { size: (1.0, 1.0, 1.0) },
+        mass: MassSpec::Mass(1.0),
+        pose,
+        velocity: Velocity::default(),
+        material,
+        fixed: false,
+    }
+}
+
+/// The pyramid: `base` rows, row r holding base − r unit cubes at x = j − (base − r − 1)/2,
+/// y = 0.5 + r, touching exactly, on a ground slab of half-extents (base/2 + 10, 0.5, 10)
+/// centred at (0, −0.5, 0); friction 0.5, restitution 0. The ground comes first, then the
+/// cubes row by row (`cube-<i>`).
+#[must_use]
+pub fn pyramid(base: u32) -> Vec<Instance> {
+    let material = Material { restitution: 0.0, friction: 0.5 };
+    let half_x = f64::from(base) * 0.5 + 10.0;
+    let mut out =
+        vec![slab("ground".into(), Vector::new(2.0 * half_x, 1.0, 20.0), Vector::new(0.0, -0.5, 0.0), material)];
+    for r in 0..base {
+        let count = base - r;
+        for j in 0..count {
+            let x = f64::from(j) - (f64::from(count) - 1.0) * 0.5;
+            let pose = Pose::from_position(Vector::new(x, 0.5 + f64::from(r), 0.0));
+            out.push(cube(format!("cube-{}", out.len() - 1), pose, material));
+        }
+    }
+    out
+}
+
+/// Height of the rain container's walls [m].
+pub const RAIN_WALL_HEIGHT: Scalar = 8.0;
+
+/// Columns per side g of a rain layer for `n` cubes: the smallest g with g² ≥ ⌈n/10⌉.
+#[must_use]
+pub fn rain_columns(n: u32) -> u32 {
+    let per_layer = n.div_ceil(10);
+    (0..).find(|g: &u32| u64::from(*g) * u64::from(*g) >= u64::from(per_layer)).unwrap_or(1)
+}
+
+/// Inner half-width of the rain container [m]: (g − 1) + 1.5.
+#[must_use]
+pub fn rain_half_width(n: u32) -> Scalar {
+    f64::from(rain_columns(n)) - 1.0 + 1.5
+}
+
+/// The rain: `n` unit cubes in layers of g × g (2 m apart, jittered ±0.1 m, turned uniformly at
+/// random; 6 SplitMix64 draws each), the lowest layer at y = 10, over an open box of 8 m walls,
+/// 1 m thick, on a floor slab reaching 50 m past the walls; friction 0.5, restitution 0.2.
+/// Floor and walls come first, then the cubes (`cube-<i>`).
+#[must_use]
+pub fn rain(n: u32, seed: u64) -> Vec<Instance> {
+    let material = Material { restitution: 0.2, friction: 0.5 };
+    let g = rain_columns(n);
+    let half_span = f64::from(g) - 1.0;
+    let a = rain_half_width(n);
+    let (t, hh) = (0.5, RAIN_WALL_HEIGHT * 0.5);
+    let floor_half = a + 2.0 * t + 50.0;
+    let mut out = vec![slab(
+        "floor".into(),
+        Vector::new(2.0 * floor_half, 1.0, 2.0 * floor_half),
+        Vector::new(0.0, -t, 0.0),
+        material,
+    )];
+    for (s, side) in [(-1.0, '-'), (1.0, '+')] {
+        let long = 2.0 * (a + 2.0 * t);
+        out.push(slab(
+            format!("wall{side}x"),
+            Vector::new(1.0, 2.0 * hh, long),
+            Vector::new(s * (a + t), hh, 0.0),
+            material,
+        ));
+        out.push(slab(
+            format!("wall{side}z"),
+            Vector::new(long, 2.0 * hh, 1.0),
+            Vector::new(0.0, hh, s * (a + t)),
+            material,
+        ));
+    }
+    let mut rng = SplitMix64::new(seed);
+    let y0 = RAIN_WALL_HEIGHT + 2.0;
+    for i in 0..n {
+        let (ix, iz, iy) = (f64::from(i % g), f64::from((i / g) % g), f64::from(i / (g * g)));
+        let j = Vector::new(rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1));
+        let u = Vector::new(rng.unit(), rng.unit(), rng.unit());
+        let position = Vector::new(ix * 2.0 - half_span + j.x, y0 + iy * 2.0 + j.y, iz * 2.0 - half_span + j.z);
+        out.push(cube(format!("cube-{i}"), Pose { position, orientation: uniform_rotation(u) }, material));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pyramid_rows_touch_and_are_centred() {
+        let p = pyramid(3);
+        assert_eq!(p.len(), 1 + 3 + 2 + 1);
+        let xs: Vec<f64> = p[1..4].iter().map(|c| c.pose.position.x).collect();
+        assert_eq!(xs, [-1.0, 0.0, 1.0]);
+        assert_eq!(p[4].pose.position, Vector::new(-0.5, 1.5, 0.0));
+        assert_eq!(p[6].pose.position, Vector::new(0.0, 2.5, 0.0));
+    }
+
+    #[test]
+    fn rain_layers_match_the_peer_harness() {
+        // n = 1000: 100 per layer, g = 10 columns, inner half-width 10.5 m, 10 layers.
+        assert_eq!((rain_columns(1000), rain_half_width(1000)), (10, 10.5));
+        let r = rain(1000, 1);
+        assert_eq!(r.len(), 5 + 1000);
+        let top = r.iter().map(|c| c.pose.position.y).fold(f64::MIN, f64::max);
+        assert!((28.0 - 0.1..28.1).contains(&top), "top layer at 10 + 9·2 m, got {top}");
+    }
+}

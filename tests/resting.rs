@@ -1,0 +1,75 @@
+//! Resting contact, friction and stacking (issue #8): a block on a slope sticks or slides as
+//! Coulomb says, a dropped box comes to rest and stays, a tower of ten stands.
+
+mod common;
+use common::*;
+use rigid_sandbox::math::Vector;
+
+/// Runs `steps` steps and returns the block's position and velocity.
+fn block_after(scene: &str, mu: f64, steps: u64) -> (Vector, Vector) {
+    let mut sim = sim_of(scene, |d| d.actors.iter_mut().for_each(|a| a.friction = mu));
+    sim.run(steps).expect("finite");
+    let b = actor(&sim, "block");
+    (b.pose.position, b.velocity.linear)
+}
+
+#[test]
+fn a_block_sticks_on_a_slope_shallower_than_atan_mu() {
+    // θ = 20°, tan θ = 0.364 < μ = 0.5: static friction holds it; drift under 1 mm in 2 s.
+    let start = actor(&sim_of("slope-stick.ron", |_| {}), "block").pose.position;
+    let (end, v) = block_after("slope-stick.ron", 0.5, 120);
+    assert!((end - start).length() < 1e-3, "drifted {} m", (end - start).length());
+    assert!(v.length() < 1e-3, "still moving at {v}");
+}
+
+#[test]
+fn a_block_slides_down_a_steeper_slope_at_the_coulomb_acceleration() {
+    // tan θ = 0.364 > μ = 0.2: a = g(sin θ − μ cos θ) along the slope, within 2 %.
+    let theta = 20f64.to_radians();
+    let want = 9.81 * (theta.sin() - 0.2 * theta.cos());
+    let down = Vector::new(-theta.cos(), -theta.sin(), 0.0);
+    let (_, v1) = block_after("slope-slide.ron", 0.2, 60);
+    let (_, v2) = block_after("slope-slide.ron", 0.2, 120);
+    // From the velocity gained between t = 1 s and t = 2 s (after any landing transient).
+    let a = (v2 - v1).dot(down) / 1.0;
+    assert!((a - want).abs() <= 0.02 * want, "a = {a}, want {want}");
+    assert!(v2.dot(Vector::new(-theta.sin(), theta.cos(), 0.0)).abs() < 1e-3, "stays on the slope: {v2}");
+}
+
+#[test]
+fn a_dropped_box_comes_to_rest_flat_and_stays() {
+    let mut sim = sim_of("box-drop.ron", |_| {});
+    sim.run(60).expect("finite");
+    let rest = actor(&sim, "box");
+    assert!(
+        rest.velocity.linear.length() < 1e-3 && rest.velocity.angular.length() < 1e-6,
+        "at rest within 1 s: {:?}",
+        rest.velocity
+    );
+    assert!(rest.pose.orientation.angle_between(rigid_sandbox::math::Quat::IDENTITY) < 1e-6, "no rotation");
+    let penetration = 0.5 - rest.pose.position.y;
+    assert!((0.0..1e-3).contains(&penetration), "penetration {penetration} m");
+    for _ in 0..600 {
+        sim.step().expect("finite");
+        let b = actor(&sim, "box");
+        assert!((b.pose.position - rest.pose.position).length() < 1e-5, "moved again at step {}", sim.steps);
+    }
+}
+
+#[test]
+fn a_tower_of_ten_boxes_stands_for_ten_seconds() {
+    let mut sim = sim_of("tower.ron", |_| {});
+    let start = actor(&sim, "box-9").pose.position;
+    sim.run(600).expect("finite");
+    let top = actor(&sim, "box-9").pose.position;
+    assert!((top - start).length() < 0.01, "the top box moved {} m", (top - start).length());
+}
+
+#[test]
+fn without_gravity_and_friction_the_contact_solver_is_idle() {
+    // The paper's model is the e = 1 / no-friction special case: solve does nothing there.
+    let mut sim = sim_of("face-collision.ron", |_| {});
+    sim.run(20).expect("finite");
+    assert!(sim.ctx.scratch.solve.rows.is_empty());
+    assert_eq!(sim.contacts, [1, 0, 0]);
+}
