@@ -91,7 +91,10 @@ pub fn resolve(world: &mut World, ctx: &mut StepContext) {
             let b = &mut ctx.bodies;
             let (mut sa, mut sb) = (state(b, ia), state(b, ib));
             let e = 0.5 * (b.restitution[ia] + b.restitution[ib]);
-            if approach_speed(&sa, &sb, &contact) <= threshold {
+            // An inelastic impact where `solve` runs is left to it: it stops the approach over
+            // the whole manifold, where one impulse at one point would set the body turning.
+            let held = e == 0.0 && ctx.params.resting_contacts(ctx.dt, 0.5 * (b.friction[ia] + b.friction[ib]));
+            if held || approach_speed(&sa, &sb, &contact) <= threshold {
                 continue;
             }
             let Some(j) = collision_impulse(&sa, &sb, &contact, e) else { continue };

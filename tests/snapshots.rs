@@ -66,3 +66,39 @@ fn a_broken_snapshot_is_bad_input() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("bad.snap:2:"), "{err}");
 }
+
+#[test]
+fn ctrl_c_saves_the_run_and_it_resumes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let snap = dir.path().join("interrupted.snap");
+    // A tiny scene: built in milliseconds, so the handler is in place long before the signal.
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/newtons-cradle.ron");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rigid"))
+        .args(["run", scene.to_str().expect("utf-8"), "--steps", "100000000", "--quiet", "--save"])
+        .arg(&snap)
+        .spawn()
+        .expect("starts");
+    // Let it get going, then interrupt it as a terminal's Ctrl-C would.
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().expect("kill runs");
+    assert!(status.success());
+    let exit = child.wait().expect("exits");
+    assert_eq!(exit.code(), Some(130), "interrupted, not failed");
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&snap).expect("saved on Ctrl-C")).expect("JSON");
+    let steps = saved["steps"].as_u64().expect("steps");
+    assert!(steps > 0, "some steps were taken");
+    let o = rigid(&[
+        "run",
+        "--resume",
+        snap.to_str().expect("utf-8"),
+        "--steps",
+        "2",
+        "--quiet",
+        "--out",
+        dir.path().join("after.json").to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, after) = hash(&dir.path().join("after.json"));
+    assert_eq!(after["steps"].as_u64(), Some(steps + 2));
+}
