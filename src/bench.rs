@@ -34,13 +34,22 @@ impl BenchScene {
         }
     }
 
-    /// The actors of the scene of this size, and how many fixed ones come first (box-gas puts
-    /// its walls last, the others their ground first, as the peer harness does).
-    fn instances(self, size: u32, seed: u64) -> (Vec<Instance>, usize) {
+    /// The actors of the scene of this size.
+    fn instances(self, size: u32, seed: u64) -> Vec<Instance> {
         match self {
-            Self::BoxGas => (box_gas(size, seed), 0),
-            Self::Pyramid => (pyramid(size), 1),
-            Self::Rain => (rain(size, seed), 5),
+            Self::BoxGas => box_gas(size, seed),
+            Self::Pyramid => pyramid(size),
+            Self::Rain => rain(size, seed),
+        }
+    }
+
+    /// Which actor indices are the cubes: box-gas puts its 6 walls after them, the others
+    /// their ground (1) or floor and walls (5) before, as the peer harness does.
+    fn cubes(self, actors: usize) -> std::ops::Range<usize> {
+        match self {
+            Self::BoxGas => 0..actors - 6,
+            Self::Pyramid => 1..actors,
+            Self::Rain => 5..actors,
         }
     }
 }
@@ -105,7 +114,7 @@ pub fn box_gas_sim(n: u32, seed: u64) -> Sim {
 pub fn scene_sim(scene: BenchScene, size: u32, seed: u64) -> Sim {
     let gravity = if scene == BenchScene::BoxGas { Vector::ZERO } else { Vector::new(0.0, -9.81, 0.0) };
     let mut sim = Sim::new(1.0 / 60.0, Params { gravity, ..Params::default() }, crate::systems::default_schedule());
-    spawn_all(&mut sim, &scene.instances(size, seed).0, Path::new(scene.name())).expect("benchmark scenes are valid");
+    spawn_all(&mut sim, &scene.instances(size, seed), Path::new(scene.name())).expect("benchmark scenes are valid");
     sim
 }
 
@@ -120,8 +129,7 @@ pub fn run(
     threads: usize,
 ) -> Result<BenchResult, crate::error::StepError> {
     let mut sim = scene_sim(scene, size, seed);
-    let fixed_first = scene.instances(0, seed).1;
-    let cubes = fixed_first..sim.len() - if scene == BenchScene::BoxGas { 6 } else { 0 };
+    let cubes = scene.cubes(sim.len());
     let start: Vec<Vector> = sim.actors()[cubes.clone()].iter().map(|a| a.pose.position).collect();
     let ke_start = sim.totals().kinetic_energy;
     sim.run(warmup)?;

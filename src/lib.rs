@@ -6,11 +6,13 @@
 //! (`systems::default_schedule`), mirroring the paper's pipeline:
 //!
 //! 1. `cull` — bounding spheres give candidate pairs;
-//! 2. `prune` — candidates a separating plane proves apart are dropped (an early-out);
+//! 2. `prune` — candidates a separating axis proves apart are dropped (an early-out);
 //! 3. `face`, 4. `vertex`, 5. `edge` — the paper's three detection tests, first hit wins;
-//! 6. `resolve` — impulse on each contact;
-//! 7. `correct` — positional correction of penetration;
-//! 8. `integrate` — velocities and poses advance.
+//! 6. `gravity` — external forces change velocities;
+//! 7. `resolve` — the corrected impulse on each impact;
+//! 8. `solve` — resting contact and friction (idle without gravity and friction);
+//! 9. `correct` — positional correction of penetration;
+//! 10. `integrate` — poses advance.
 //!
 //! ```
 //! use rigid_sandbox::{build, scene};

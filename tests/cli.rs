@@ -164,3 +164,54 @@ fn bad_input_exits_2_with_file_line_and_column() {
     let o = rigid(&["run", "--dt", "-1"]);
     assert_eq!(o.status.code(), Some(2), "bad flag");
 }
+
+#[test]
+fn bench_json_has_the_fields_of_benchmarks_md_and_the_scene_check_value() {
+    let o = rigid(&[
+        "bench",
+        "box-gas",
+        "--actors",
+        "1000,125",
+        "--steps",
+        "2",
+        "--warmup",
+        "1",
+        "--threads",
+        "1",
+        "--json",
+    ]);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let rows: Vec<serde_json::Value> =
+        out.lines().map(|l| serde_json::from_str(l).expect("one JSON object a line")).collect();
+    assert_eq!(rows.iter().map(|r| r["actors"].as_u64()).collect::<Vec<_>>(), [Some(125), Some(1000)], "ascending N");
+    let r = &rows[1];
+    for field in [
+        "scene",
+        "steps",
+        "warmup",
+        "seed",
+        "threads",
+        "mean_ms_per_step",
+        "median_ms_per_step",
+        "ke_end",
+        "escaped",
+        "peak_rss_mib",
+    ] {
+        assert!(!r[field].is_null(), "missing {field}: {r}");
+    }
+    assert_eq!((r["scene"].as_str(), r["steps"].as_u64(), r["threads"].as_u64()), (Some("box-gas"), Some(2), Some(1)));
+    // BENCHMARKS.md: total kinetic energy at start for N = 1000 is 2104.5686 J.
+    assert!((r["ke_start"].as_f64().expect("number") - 2104.5686).abs() < 1e-4, "{}", r["ke_start"]);
+    let systems = r["systems_ms"].as_object().expect("per-system times");
+    for name in ["cull", "face", "vertex", "edge", "resolve", "integrate"] {
+        assert!(systems.contains_key(name), "systems_ms lacks {name}");
+    }
+    let o = rigid(&["bench", "pyramid", "--base", "3", "--steps", "2", "--json"]);
+    let r: serde_json::Value = serde_json::from_str(text(&o).0.trim()).expect("JSON");
+    assert_eq!(
+        (r["scene"].as_str(), r["base"].as_u64(), r["actors"].as_u64(), r["sleep"].as_bool()),
+        (Some("pyramid"), Some(3), Some(6), Some(false))
+    );
+    assert!(r["max_displacement_m"].as_f64().is_some());
+}
