@@ -39,17 +39,10 @@ const SAME_POINT: Scalar = 1e-6;
 /// distance to the other body's face that faces it (the face whose normal is closest to the
 /// contact normal `n`, from B to A, for A's vertices; to −n for B's): the distance to the
 /// *nearest* face would be a side face's for a corner on an edge, near zero however deep the
-/// corner is. Falls back to `point` (the detected contact) when no vertex qualifies (an edge
-/// crossing an edge). `scratch` is reused.
+/// corner is. Empty when no vertex qualifies (an edge crossing an edge): the caller falls back
+/// to the detected contact. `scratch` is reused.
 #[must_use]
-pub fn manifold(
-    a: &Posed,
-    b: &Posed,
-    point: Vector,
-    n: Vector,
-    margin: Scalar,
-    scratch: &mut Vec<(Vector, Scalar)>,
-) -> Manifold {
+pub fn manifold(a: &Posed, b: &Posed, n: Vector, margin: Scalar, scratch: &mut Vec<(Vector, Scalar)>) -> Manifold {
     let facing = |p: &Posed, dir: Vector| {
         p.planes
             .iter()
@@ -62,8 +55,9 @@ pub fn manifold(
     let near = |p: &Posed, v: Vector| p.max_plane_distance(v).0 <= margin;
     scratch.extend(a.vertices.iter().filter(|&&v| near(b, v)).map(|&v| (v, face_b.0.dot(v) - face_b.1)));
     scratch.extend(b.vertices.iter().filter(|&&v| near(a, v)).map(|&v| (v, face_a.0.dot(v) - face_a.1)));
-    let mut m = Manifold { points: [point; MAX_POINTS], gaps: [0.0; MAX_POINTS], len: 1 };
+    let mut m = Manifold::default();
     let Some(&(p0, g0)) = scratch.iter().min_by(|x, y| x.1.total_cmp(&y.1)) else { return m };
+    m.len = 1;
     let same = SAME_POINT * a.mesh.radius.min(b.mesh.radius);
     (m.points[0], m.gaps[0]) = (p0, g0);
     let best = |score: &dyn Fn(Vector) -> Scalar| {
@@ -120,7 +114,7 @@ mod tests {
         );
         let cube =
             Posed::new(Arc::new(ConvexMesh::cuboid(Vector::ONE)), &Pose::from_position(Vector::new(0.0, 0.499, 0.0)));
-        let m = manifold(&cube, &floor, Vector::new(0.0, -0.001, 0.0), Vector::Y, 0.02, &mut Vec::new());
+        let m = manifold(&cube, &floor, Vector::Y, 0.02, &mut Vec::new());
         assert_eq!(m.len, 4);
         let mut corners: Vec<(i64, i64)> =
             m.points().iter().map(|p| ((p.x * 2.0) as i64, (p.z * 2.0) as i64)).collect();

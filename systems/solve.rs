@@ -52,17 +52,21 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
         let thin = meshes.get(b.mesh[pair.a as usize]).thickness.min(meshes.get(b.mesh[pair.b as usize]).thickness);
         // A pair the tests passed over may still be resting a hair apart: hold it speculatively
         // along the face normal that separates it (a touching pair's contact is the tests').
-        if pair.is_candidate() {
-            match near_normal(pa, pb, margin * thin) {
-                Some((normal, _)) => pair.state = PairState::Resolved(near_contact(pa, pb, normal)),
-                None => {
-                    m.len = 0;
-                    return;
-                }
-            }
+        let near = pair.is_candidate();
+        if near {
+            let Some((normal, _)) = near_normal(pa, pb, margin * thin) else {
+                m.len = 0;
+                return;
+            };
+            pair.state = PairState::Resolved(near_contact(pa, pb, normal));
         }
         let contact = pair.contact().expect("a contact by now");
-        *m = manifold(pa, pb, contact.point, contact.normal, margin * thin, scratch);
+        *m = manifold(pa, pb, contact.normal, margin * thin, scratch);
+        if m.len == 0 && !near {
+            // No vertex in or near the other body (an edge crossing an edge): hold the contact
+            // the tests found, at its depth. A near pair without such vertices is not held.
+            (m.points[0], m.gaps[0], m.len) = (contact.point, -contact.depth, 1);
+        }
     });
     build_rows(ctx);
     warm_start(ctx);
@@ -73,7 +77,8 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
     ctx.bodies.store(world);
 }
 
-/// The contact of a near pair: midway between the bodies' closest sides along `normal`.
+/// The contact of a near pair: its normal is what matters (the manifold's vertices are its
+/// points); the point is halfway between the centres and is never used as a manifold point.
 fn near_contact(a: &Posed, b: &Posed, normal: Vector) -> Contact {
     let point = 0.5 * (a.position + b.position);
     Contact { point, normal, depth: 0.0, feature: Feature::Face }
