@@ -190,10 +190,12 @@ fn run(args: &RunArgs) -> Result<(), AppError> {
     let mut last_good: Option<Vec<ActorState>> = None;
     for _ in 0..steps {
         if INTERRUPTED.swap(false, Ordering::SeqCst) {
+            // Keep what the run has made so far: state, snapshot and trajectory to this step.
             save(&sim)?;
             if let Some(out) = &args.out {
                 write_out(out, state_json(&sim, &sim.actors()))?;
             }
+            finish_trajectory(trajectory)?;
             return Err(AppError::Interrupted { step: sim.steps });
         }
         if args.out.is_some() {
@@ -202,6 +204,9 @@ fn run(args: &RunArgs) -> Result<(), AppError> {
         if let Err(e) = sim.step() {
             if let (Some(out), Some(state)) = (&args.out, &last_good) {
                 write_out(out, state_json(&sim, state))?;
+            }
+            if let Some((p, _)) = &trajectory {
+                let _ = std::fs::remove_file(crate::output::temp_path(p));
             }
             return Err(e.into());
         }
@@ -218,10 +223,7 @@ fn run(args: &RunArgs) -> Result<(), AppError> {
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    if let Some((p, buf)) = trajectory {
-        let bytes = buf.into_inner().map_err(|e| write_error(p, e.into_error()))?;
-        write_out(p, &bytes)?;
-    }
+    finish_trajectory(trajectory)?;
     if let Some(out) = &args.out {
         write_out(out, state_json(&sim, &sim.actors()))?;
     }
@@ -232,10 +234,24 @@ fn run(args: &RunArgs) -> Result<(), AppError> {
     Ok(())
 }
 
-fn trajectory_start(path: &Path, sim: &Sim) -> Result<std::io::BufWriter<Vec<u8>>, AppError> {
-    let mut buf = std::io::BufWriter::new(Vec::new());
+/// Flushes the trajectory's temporary file and renames it into place.
+fn finish_trajectory(trajectory: Option<(&PathBuf, std::io::BufWriter<std::fs::File>)>) -> Result<(), AppError> {
+    let Some((p, buf)) = trajectory else { return Ok(()) };
+    buf.into_inner()
+        .map_err(|e| e.into_error())
+        .and_then(|file| file.sync_all())
+        .and_then(|()| std::fs::rename(crate::output::temp_path(p), p))
+        .map_err(|e| write_error(p, e))
+}
+
+/// Opens the trajectory's temporary file and writes the header and the starting state (step 0,
+/// or the step a resumed run starts from). Rows stream to disk: a long run of many actors does
+/// not hold its trajectory in memory.
+fn trajectory_start(path: &Path, sim: &Sim) -> Result<std::io::BufWriter<std::fs::File>, AppError> {
+    let file = std::fs::File::create(crate::output::temp_path(path)).map_err(|e| write_error(path, e))?;
+    let mut buf = std::io::BufWriter::new(file);
     writeln!(buf, "{TRAJECTORY_HEADER}").map_err(|e| write_error(path, e))?;
-    trajectory_rows(&mut buf, 0, 0.0, &sim.actors()).map_err(|e| write_error(path, e))?;
+    trajectory_rows(&mut buf, sim.steps, sim.time, &sim.actors()).map_err(|e| write_error(path, e))?;
     Ok(buf)
 }
 
