@@ -250,6 +250,8 @@ pub struct SolveScratch {
     pub step: u64,
     /// Pseudo-velocities (linear, angular) of `correct`'s split impulses, by body.
     pub pseudo: Vec<(Vector, Vector)>,
+    /// Accumulated split impulses, by row.
+    pub lambda: Vec<Scalar>,
 }
 
 /// Reused allocations of the shipped systems.

@@ -66,9 +66,10 @@ fn split_impulses(ctx: &mut StepContext) {
     s.pseudo.clear();
     s.pseudo.resize(n, (Vector::ZERO, Vector::ZERO));
     let b = &ctx.bodies;
-    let mut lambda = vec![0.0; s.rows.len()];
+    s.lambda.clear();
+    s.lambda.resize(s.rows.len(), 0.0);
     for _ in 0..ctx.params.iterations {
-        for (row, acc) in s.rows.iter().zip(&mut lambda) {
+        for (row, acc) in s.rows.iter().zip(&mut s.lambda) {
             let (ia, ib) = (row.a as usize, row.b as usize);
             let thin = ctx.meshes.get(b.mesh[ia]).thickness.min(ctx.meshes.get(b.mesh[ib]).thickness);
             // Capped like the paper-pair correction: a wrong normal must not throw a body away.
