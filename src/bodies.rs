@@ -24,8 +24,6 @@ pub struct Bodies {
     pub angular_velocity: Vec<Vector>,
     /// 1/m, 0 for fixed actors [1/kg].
     pub inv_mass: Vec<Scalar>,
-    /// Body-frame inertia [kg·m²].
-    pub inertia_body: Vec<Mat3>,
     /// Principal moments [kg·m²].
     pub principal_moments: Vec<Vector>,
     /// Principal frame → body frame.
@@ -81,7 +79,6 @@ impl Bodies {
             self.velocity[i] = vel.linear;
             self.angular_velocity[i] = vel.angular;
             self.inv_mass[i] = mass.inv_mass;
-            self.inertia_body[i] = mass.inertia;
             self.inv_inertia_body[i] = mass.inv_inertia;
             self.principal_moments[i] = mass.principal_moments;
             self.principal_axes[i] = mass.principal_axes;
@@ -134,7 +131,6 @@ impl Bodies {
         self.velocity.resize(n, Vector::ZERO);
         self.angular_velocity.resize(n, Vector::ZERO);
         self.inv_mass.resize(n, 0.0);
-        self.inertia_body.resize(n, Mat3::ZERO);
         self.inv_inertia_body.resize(n, Mat3::ZERO);
         self.principal_moments.resize(n, Vector::ZERO);
         self.principal_axes.resize(n, Quat::IDENTITY);

@@ -3,7 +3,7 @@
 
 use crate::components::Pose;
 use crate::math::{Scalar, Vector};
-use crate::mesh::{ConvexMesh, Plane, max_distance};
+use crate::mesh::{ConvexMesh, Plane};
 use std::sync::Arc;
 
 /// Inside tolerance relative to the body's radius: points this far outside a face still count
@@ -80,7 +80,7 @@ impl Posed {
     /// deterministic, and for a box resting on another picks the top face, not a side.
     #[must_use]
     pub fn closest_face_normal(&self, p: Vector, toward: Vector) -> Vector {
-        let (best, _) = self.max_plane_distance(p);
+        let best = self.max_plane_distance(p);
         let tie = FACE_TIE_TOLERANCE * self.mesh.radius;
         let mut chosen = (Scalar::NEG_INFINITY, Vector::ZERO);
         for pl in &self.planes {
@@ -92,11 +92,11 @@ impl Posed {
         chosen.1
     }
 
-    /// Largest signed distance of `p` to a face plane and that plane's index (the closest face
-    /// of an inside point, PHYSICS.md §1.1).
+    /// Largest signed distance of `p` to a face plane: `p` is inside iff it is ≤ the inside
+    /// tolerance, and minus it is the depth below the closest face (PHYSICS.md §1.1).
     #[must_use]
-    pub fn max_plane_distance(&self, p: Vector) -> (Scalar, usize) {
-        max_distance(self.planes.iter().map(|pl| pl.normal.dot(p) - pl.offset))
+    pub fn max_plane_distance(&self, p: Vector) -> Scalar {
+        self.planes.iter().map(|pl| pl.normal.dot(p) - pl.offset).fold(Scalar::NEG_INFINITY, Scalar::max)
     }
 }
 

@@ -52,7 +52,7 @@ pub fn manifold(a: &Posed, b: &Posed, n: Vector, margin: Scalar, scratch: &mut V
     };
     let (face_b, face_a) = (facing(b, n), facing(a, -n));
     scratch.clear();
-    let near = |p: &Posed, v: Vector| p.max_plane_distance(v).0 <= margin;
+    let near = |p: &Posed, v: Vector| p.max_plane_distance(v) <= margin;
     scratch.extend(a.vertices.iter().filter(|&&v| near(b, v)).map(|&v| (v, face_b.0.dot(v) - face_b.1)));
     scratch.extend(b.vertices.iter().filter(|&&v| near(a, v)).map(|&v| (v, face_a.0.dot(v) - face_a.1)));
     let mut m = Manifold::default();

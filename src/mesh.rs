@@ -119,26 +119,6 @@ impl ConvexMesh {
         let (v, t) = crate::shapes::box_raw(size);
         Self::new(v, t).expect("a box with positive sizes is a valid convex mesh").0
     }
-
-    /// Signed distance of body-frame point `p` to each plane, maximum and its plane index:
-    /// `p` is inside iff the maximum is ≤ the inside tolerance (PHYSICS.md §1.1).
-    #[must_use]
-    pub fn max_plane_distance(&self, p: Vector) -> (Scalar, usize) {
-        max_distance(self.planes.iter().map(|pl| pl.normal.dot(p) - pl.offset))
-    }
-}
-
-/// The largest of a sequence of signed distances and its index; ties keep the lowest index,
-/// so the closest face of a point exactly on an edge is deterministic (PHYSICS.md §1.1).
-#[must_use]
-pub fn max_distance(distances: impl Iterator<Item = Scalar>) -> (Scalar, usize) {
-    let mut best = (Scalar::NEG_INFINITY, 0);
-    for (i, s) in distances.enumerate() {
-        if s > best.0 {
-            best = (s, i);
-        }
-    }
-    best
 }
 
 /// Every mesh of a simulation, once: box-gas's 64 000 cubes share one.

@@ -27,7 +27,7 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let (mut sum, mut count) = (Vector::ZERO, 0_u32);
     let mut deepest = (Scalar::INFINITY, Vector::ZERO);
     for &v in &a.vertices {
-        let (s, _) = b.max_plane_distance(v);
+        let s = b.max_plane_distance(v);
         if s <= eps {
             sum += v;
             count += 1;
