@@ -11,10 +11,10 @@ use std::sync::Arc;
 /// approach test of §2.5 keeps touching-but-separating bodies from getting impulses.
 pub const INSIDE_TOLERANCE: Scalar = 1e-9;
 
-/// Planes this close to the nearest one [fraction of the body's radius] tie for "closest face":
-/// a vertex sitting on an edge or a corner (a box stacked exactly on another) is nearly as
-/// close to the side faces as to the top, and rounding must not pick a side.
-pub const FACE_TIE_TOLERANCE: Scalar = 1e-4;
+/// Planes this close to the nearest one [fraction of the body's radius] are candidates for a
+/// point's "closest face": a corner resting on an edge or next to a neighbour's corner is
+/// nearly as close to a side face as to the top, and rounding must not decide which.
+pub const FACE_TIE_TOLERANCE: Scalar = 1e-2;
 
 /// A mesh at a pose: world-space vertices and face planes, computed once per body per step.
 #[derive(Clone, Debug)]
@@ -73,23 +73,26 @@ impl Posed {
         INSIDE_TOLERANCE * self.mesh.radius
     }
 
-    /// The outward normal of the face closest to inside point `p` (PHYSICS.md §1.1): the plane
-    /// of largest signed distance, ties (within `FACE_TIE_TOLERANCE`) going to the face that
-    /// looks most along `toward` (the direction to the other body). PHYSICS.md breaks exact
-    /// ties by the relative velocity; the direction to the other body needs no velocity, is
-    /// deterministic, and for a box resting on another picks the top face, not a side.
+    /// The outward normal of the face of this body (B) closest to inside point `p`, for a
+    /// contact with `other` (A): PHYSICS.md §1.1's closest face, with near ties (within
+    /// `FACE_TIE_TOLERANCE`) going to the face along which the two bodies overlap least
+    /// (§2.6's depth), then to the one facing A. PHYSICS.md breaks exact ties by velocity; for
+    /// two boxes side by side whose shared corner dips a hair below one's bottom face, the
+    /// bottom is "closest" to the corner yet the bodies overlap a whole height along it, and
+    /// the side is the true contact normal.
     #[must_use]
-    pub fn closest_face_normal(&self, p: Vector, toward: Vector) -> Vector {
+    pub fn closest_face_normal(&self, p: Vector, other: &Self) -> Vector {
         let best = self.max_plane_distance(p);
         let tie = FACE_TIE_TOLERANCE * self.mesh.radius;
-        let mut chosen = (Scalar::NEG_INFINITY, Vector::ZERO);
-        for pl in &self.planes {
-            let facing = pl.normal.dot(toward);
-            if pl.normal.dot(p) - pl.offset >= best - tie && facing > chosen.0 {
-                chosen = (facing, pl.normal);
+        let toward = other.position - self.position;
+        let mut chosen = (Scalar::INFINITY, Scalar::NEG_INFINITY, Vector::ZERO);
+        for pl in self.planes.iter().filter(|pl| pl.normal.dot(p) - pl.offset >= best - tie) {
+            let (depth, facing) = (depth_along(other, self, pl.normal), pl.normal.dot(toward));
+            if depth < chosen.0 || (depth == chosen.0 && facing > chosen.1) {
+                chosen = (depth, facing, pl.normal);
             }
         }
-        chosen.1
+        chosen.2
     }
 
     /// Largest signed distance of `p` to a face plane: `p` is inside iff it is ≤ the inside

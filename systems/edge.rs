@@ -50,8 +50,7 @@ pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
             }
             _ => None,
         };
-        let toward = a.position - b.position;
-        let face = b.closest_face_normal(point, toward);
+        let face = b.closest_face_normal(point, a);
         let normal = match crossing {
             // The entry and exit planes meet in B's edge only if the segment passes near that
             // edge. An edge of A lying just under a face of B (a box resting across two others,

@@ -64,7 +64,7 @@ pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     }
     let point = sum_point / Scalar::from(count);
     let normal = if sum_normal.length() < CANCELLED_NORMAL * sum_area {
-        b.closest_face_normal(point, a.position - b.position)
+        b.closest_face_normal(point, a)
     } else {
         -sum_normal.normalize()
     };

@@ -39,7 +39,7 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     if count == 0 {
         return None;
     }
-    let normal = b.closest_face_normal(deepest.1, a.position - b.position);
+    let normal = b.closest_face_normal(deepest.1, a);
     Some(Contact {
         point: sum / Scalar::from(count),
         normal,
