@@ -164,6 +164,20 @@ pub struct CullScratch {
     pub chunks: Vec<Vec<(u32, u32)>>,
 }
 
+/// One direction of a solver row: everything an impulse along it needs, computed once a step
+/// so a sweep does no matrix products.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RowAxis {
+    /// Unit direction d.
+    pub dir: Vector,
+    /// r_a × d and r_b × d: the relative speed along d is (v_a − v_b)·d + ω_a·arm_a − ω_b·arm_b.
+    pub arm: [Vector; 2],
+    /// I_a⁻¹ (r_a × d) and I_b⁻¹ (r_b × d): the spin an impulse of 1 along d gives each body.
+    pub spin: [Vector; 2],
+    /// Effective mass along d, 1 / K [kg] (PHYSICS.md §2.5's K).
+    pub mass: Scalar,
+}
+
 /// One manifold point as the contact solver (`solve`) sees it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SolverRow {
@@ -173,34 +187,18 @@ pub struct SolverRow {
     pub b: u32,
     /// The test that found the pair's contact; `None` for a near pair held speculatively.
     pub feature: Option<Feature>,
-    /// Point relative to A's and B's centres of mass [m].
-    pub r_a: Vector,
-    /// See `r_a`.
-    pub r_b: Vector,
+    /// Inverse masses of A and B [1/kg].
+    pub inv_mass: [Scalar; 2],
     /// The point in A's body frame, to match it next step.
     pub local: Vector,
-    /// Contact normal, from B to A.
-    pub n: Vector,
-    /// First tangent.
-    pub t1: Vector,
-    /// Second tangent.
-    pub t2: Vector,
-    /// Effective masses along n, t1, t2 [kg].
-    pub k_n: Scalar,
-    /// See `k_n`.
-    pub k_t1: Scalar,
-    /// See `k_n`.
-    pub k_t2: Scalar,
+    /// Normal (from B to A) and the two tangents.
+    pub axes: [RowAxis; 3],
     /// Friction coefficient of the pair.
     pub mu: Scalar,
     /// Gap at the point when the step began [m]: > 0 apart (speculative), < 0 penetrating.
     pub gap: Scalar,
-    /// Accumulated normal impulse [N·s], ≥ 0.
-    pub jn: Scalar,
-    /// Accumulated friction impulses along t1, t2 [N·s].
-    pub jt1: Scalar,
-    /// See `jt1`.
-    pub jt2: Scalar,
+    /// Accumulated impulses along the axes [N·s]: normal (≥ 0), then the two friction ones.
+    pub impulse: [Scalar; 3],
 }
 
 /// A point's impulses kept for the next step's warm start.

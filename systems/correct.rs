@@ -75,14 +75,15 @@ fn split_impulses(ctx: &mut StepContext) {
             // Capped like the paper-pair correction: a wrong normal must not throw a body away.
             let target = (beta * (-row.gap - slop * thin)).clamp(0.0, cap * thin) / dt;
             let ((va, wa), (vb, wb)) = (s.pseudo[ia], s.pseudo[ib]);
-            let u = (va + wa.cross(row.r_a) - vb - wb.cross(row.r_b)).dot(row.n);
-            let next = (*acc + (target - u) * row.k_n).max(0.0);
-            let p = row.n * (next - *acc);
+            let n = &row.axes[0];
+            let u = (va - vb).dot(n.dir) + wa.dot(n.arm[0]) - wb.dot(n.arm[1]);
+            let next = (*acc + (target - u) * n.mass).max(0.0);
+            let dj = next - *acc;
             *acc = next;
-            s.pseudo[ia].0 += p * b.inv_mass[ia];
-            s.pseudo[ia].1 += b.inv_inertia_world[ia] * row.r_a.cross(p);
-            s.pseudo[ib].0 -= p * b.inv_mass[ib];
-            s.pseudo[ib].1 -= b.inv_inertia_world[ib] * row.r_b.cross(p);
+            s.pseudo[ia].0 += n.dir * (dj * row.inv_mass[0]);
+            s.pseudo[ia].1 += n.spin[0] * dj;
+            s.pseudo[ib].0 -= n.dir * (dj * row.inv_mass[1]);
+            s.pseudo[ib].1 -= n.spin[1] * dj;
         }
     }
     for i in 0..n {

@@ -9,11 +9,12 @@
 //! Penetration is left to `correct`, which removes it with split impulses on these same rows:
 //! positions move, velocities do not, so no energy is added.
 
+use crate::bodies::Bodies;
 use crate::contact::{Contact, Feature, Pair, PairState};
 use crate::geometry::Posed;
 use crate::manifold::{Manifold, manifold, near_normal};
-use crate::math::{Mat3, Scalar, Vector};
-use crate::step::{CachedManifold, CachedPoint, SolverRow, StepContext};
+use crate::math::{Scalar, Vector};
+use crate::step::{CachedManifold, CachedPoint, RowAxis, SolverRow, StepContext};
 use hecs::World;
 use rayon::prelude::*;
 
@@ -96,20 +97,18 @@ fn build_rows(ctx: &mut StepContext) {
         let n = contact.normal;
         let (t1, t2) = tangents(n);
         let mu = 0.5 * (b.friction[ia] + b.friction[ib]);
+        let inv_mass = [b.inv_mass[ia], b.inv_mass[ib]];
+        let inv_inertia = [&b.inv_inertia_world[ia], &b.inv_inertia_world[ib]];
         let cached = s.cache.get(&(pair.a, pair.b));
         for (&p, &gap) in m.points().iter().zip(&m.gaps) {
-            let (r_a, r_b) = (p - b.position[ia], p - b.position[ib]);
-            let k = |d: Vector| {
-                effective_mass(
-                    b.inv_mass[ia] + b.inv_mass[ib],
-                    &b.inv_inertia_world[ia],
-                    r_a,
-                    &b.inv_inertia_world[ib],
-                    r_b,
-                    d,
-                )
+            let r = [p - b.position[ia], p - b.position[ib]];
+            let axis = |dir: Vector| {
+                let arm = [r[0].cross(dir), r[1].cross(dir)];
+                let spin = [*inv_inertia[0] * arm[0], *inv_inertia[1] * arm[1]];
+                let k = inv_mass[0] + inv_mass[1] + arm[0].dot(spin[0]) + arm[1].dot(spin[1]);
+                RowAxis { dir, arm, spin, mass: if k > 0.0 { 1.0 / k } else { 0.0 } }
             };
-            let local = b.rotation[ia].transpose() * r_a;
+            let local = b.rotation[ia].transpose() * r[0];
             let reach = MATCH_DISTANCE * b.radius[ia];
             let old = cached.and_then(|c| c.points().iter().find(|q| (q.local - local).length() <= reach));
             let (jn, jt) = old.map_or((0.0, Vector::ZERO), |q| (q.normal, q.tangent));
@@ -117,31 +116,15 @@ fn build_rows(ctx: &mut StepContext) {
                 a: pair.a,
                 b: pair.b,
                 feature: (!near).then_some(contact.feature),
-                r_a,
-                r_b,
+                inv_mass,
                 local,
-                n,
-                t1,
-                t2,
-                k_n: k(n),
-                k_t1: k(t1),
-                k_t2: k(t2),
+                axes: [axis(n), axis(t1), axis(t2)],
                 mu,
                 gap,
-                jn,
-                jt1: jt.dot(t1),
-                jt2: jt.dot(t2),
+                impulse: [jn, jt.dot(t1), jt.dot(t2)],
             });
         }
     }
-}
-
-/// `1 / (1/m_a + 1/m_b + (r_a×d)·I_a⁻¹(r_a×d) + (r_b×d)·I_b⁻¹(r_b×d))`, the mass the impulse
-/// along `d` sees at the point (PHYSICS.md §2.5's K, inverted).
-fn effective_mass(inv_m: Scalar, ia: &Mat3, r_a: Vector, ib: &Mat3, r_b: Vector, d: Vector) -> Scalar {
-    let (ka, kb) = (r_a.cross(d), r_b.cross(d));
-    let k = inv_m + ka.dot(*ia * ka) + kb.dot(*ib * kb);
-    if k > 0.0 { 1.0 / k } else { 0.0 }
 }
 
 /// Two unit vectors completing `n` to a right-handed orthonormal basis.
@@ -151,66 +134,68 @@ fn tangents(n: Vector) -> (Vector, Vector) {
     (t1, n.cross(t1))
 }
 
-/// Applies impulse `p` at the row's point: +p on A, −p on B.
-fn apply(ctx: &mut StepContext, row: &SolverRow, p: Vector) {
-    let b = &mut ctx.bodies;
+/// Relative speed of A against B along `axis` at the row's point.
+#[inline]
+fn speed(b: &Bodies, row: &SolverRow, axis: &RowAxis) -> Scalar {
     let (ia, ib) = (row.a as usize, row.b as usize);
-    b.velocity[ia] += p * b.inv_mass[ia];
-    b.angular_velocity[ia] += b.inv_inertia_world[ia] * row.r_a.cross(p);
-    b.velocity[ib] -= p * b.inv_mass[ib];
-    b.angular_velocity[ib] -= b.inv_inertia_world[ib] * row.r_b.cross(p);
+    (b.velocity[ia] - b.velocity[ib]).dot(axis.dir) + b.angular_velocity[ia].dot(axis.arm[0])
+        - b.angular_velocity[ib].dot(axis.arm[1])
 }
 
-fn relative_velocity(ctx: &StepContext, row: &SolverRow) -> Vector {
-    let b = &ctx.bodies;
+/// Applies an impulse of `j` along `axis` at the row's point: +j on A, −j on B.
+#[inline]
+fn push(b: &mut Bodies, row: &SolverRow, axis: &RowAxis, j: Scalar) {
     let (ia, ib) = (row.a as usize, row.b as usize);
-    (b.velocity[ia] + b.angular_velocity[ia].cross(row.r_a)) - (b.velocity[ib] + b.angular_velocity[ib].cross(row.r_b))
+    b.velocity[ia] += axis.dir * (j * row.inv_mass[0]);
+    b.angular_velocity[ia] += axis.spin[0] * j;
+    b.velocity[ib] -= axis.dir * (j * row.inv_mass[1]);
+    b.angular_velocity[ib] -= axis.spin[1] * j;
 }
 
 /// Re-applies last step's impulses: a resting stack starts near its solution.
 fn warm_start(ctx: &mut StepContext) {
-    let rows = std::mem::take(&mut ctx.scratch.solve.rows);
-    for row in &rows {
-        apply(ctx, row, row.n * row.jn + row.t1 * row.jt1 + row.t2 * row.jt2);
+    let b = &mut ctx.bodies;
+    for row in &ctx.scratch.solve.rows {
+        for (axis, &j) in row.axes.iter().zip(&row.impulse) {
+            push(b, row, axis, j);
+        }
     }
-    ctx.scratch.solve.rows = rows;
 }
 
 /// One Gauss–Seidel sweep, forwards or backwards through the rows (alternating, so the weight
-/// of a stack travels down as fast as the support travels up): friction at every point first (within the Coulomb cone of the
-/// current normal impulse), then the normal impulses that stop approach (accumulated, never
-/// pulling). Normal rows last, as in Box2D: non-penetration matters more than friction, so it
-/// gets the final word in each sweep.
+/// of a stack travels down as fast as the support travels up): friction at every point first
+/// (within the Coulomb cone of the current normal impulse), then the normal impulses that stop
+/// approach (accumulated, never pulling). Normal rows last, as in Box2D: non-penetration
+/// matters more than friction, so it gets the final word in each sweep.
 fn iterate(ctx: &mut StepContext, backwards: bool) {
-    let dt = ctx.dt;
-    let mut rows = std::mem::take(&mut ctx.scratch.solve.rows);
+    let (b, rows, dt) = (&mut ctx.bodies, &mut ctx.scratch.solve.rows, ctx.dt);
     if backwards {
         rows.reverse();
     }
     for row in rows.iter_mut().filter(|r| r.mu > 0.0) {
-        let u = relative_velocity(ctx, row);
-        let (mut j1, mut j2) = (row.jt1 - u.dot(row.t1) * row.k_t1, row.jt2 - u.dot(row.t2) * row.k_t2);
-        let limit = row.mu * row.jn;
+        let [_, t1, t2] = row.axes;
+        let (mut j1, mut j2) =
+            (row.impulse[1] - speed(b, row, &t1) * t1.mass, row.impulse[2] - speed(b, row, &t2) * t2.mass);
+        let limit = row.mu * row.impulse[0];
         let len = (j1 * j1 + j2 * j2).sqrt();
         if len > limit {
             (j1, j2) = (j1 * limit / len, j2 * limit / len);
         }
-        let p = row.t1 * (j1 - row.jt1) + row.t2 * (j2 - row.jt2);
-        (row.jt1, row.jt2) = (j1, j2);
-        apply(ctx, row, p);
+        push(b, row, &t1, j1 - row.impulse[1]);
+        push(b, row, &t2, j2 - row.impulse[2]);
+        (row.impulse[1], row.impulse[2]) = (j1, j2);
     }
-    for row in &mut rows {
+    for row in rows.iter_mut() {
+        let n = row.axes[0];
         // Speculative points may approach by their gap this step: u_n ≥ −gap/dt.
-        let u_n = relative_velocity(ctx, row).dot(row.n) + row.gap.max(0.0) / dt;
-        let jn = (row.jn - u_n * row.k_n).max(0.0);
-        let dn = jn - row.jn;
-        row.jn = jn;
-        apply(ctx, row, row.n * dn);
+        let u_n = speed(b, row, &n) + row.gap.max(0.0) / dt;
+        let jn = (row.impulse[0] - u_n * n.mass).max(0.0);
+        push(b, row, &n, jn - row.impulse[0]);
+        row.impulse[0] = jn;
     }
     if backwards {
         rows.reverse();
     }
-    ctx.scratch.solve.rows = rows;
 }
 
 /// Keeps this step's impulses for the next step's warm start, and counts one impulse per pair
@@ -222,12 +207,13 @@ fn remember(ctx: &mut StepContext) {
     for row in &s.rows {
         let entry: &mut CachedManifold = s.cache.entry((row.a, row.b)).or_default();
         if entry.len < entry.points.len() {
-            entry.points[entry.len] =
-                CachedPoint { local: row.local, normal: row.jn, tangent: row.t1 * row.jt1 + row.t2 * row.jt2 };
+            let [jn, j1, j2] = row.impulse;
+            let tangent = row.axes[1].dir * j1 + row.axes[2].dir * j2;
+            entry.points[entry.len] = CachedPoint { local: row.local, normal: jn, tangent };
             entry.len += 1;
         }
         if let Some(feature) = row.feature
-            && row.jn > 0.0
+            && row.impulse[0] > 0.0
             && held != Some((row.a, row.b))
         {
             held = Some((row.a, row.b));
