@@ -22,7 +22,7 @@ const SHALLOW_FACE: Scalar = 2.0;
 /// - Paper: edge test; PHYSICS.md §1.5 and erratum E4.
 /// - Cost: O(E_A·F_B + E_B·F_A) per candidate pair (clipping, not the paper's sort).
 pub fn edge(_world: &mut World, ctx: &mut StepContext) {
-    super::face::detect(ctx, edge_contact);
+    super::face::detect(ctx, edge_contact, Feature::Edge);
 }
 
 /// The first edge of `a` (sorted order) that crosses convex `b`: the midpoint of its inside

@@ -19,12 +19,12 @@ const CANCELLED_NORMAL: Scalar = 1e-6;
 /// - Paper: face test; PHYSICS.md §1.3, errata E2, E3; order of §1.6.
 /// - Cost: O(F_A·F_B) per candidate pair.
 pub fn face(_world: &mut World, ctx: &mut StepContext) {
-    detect(ctx, face_contact);
+    detect(ctx, face_contact, Feature::Face);
 }
 
 /// Runs `kernel` both ways on every candidate pair and records the first hit (PHYSICS.md
 /// §1.6): the (B, A) result has its normal flipped so it still points from B to A.
-pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option<Contact>) {
+pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option<Contact>, feature: Feature) {
     ctx.pose_candidates();
     let posed = &ctx.posed;
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate()).for_each(|pair| {
@@ -33,11 +33,10 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option
             pair.state = PairState::Found(contact);
         }
     });
-    for pair in &ctx.pairs {
-        if let PairState::Found(c) = pair.state {
-            ctx.stats.found[c.feature as usize] += 1;
-        }
-    }
+    // Only this test reports `feature`, so this counts its hits once even when a schedule runs
+    // it twice; hits of earlier tests keep their own feature.
+    let hits = ctx.pairs.iter().filter(|p| matches!(p.state, PairState::Found(c) if c.feature == feature)).count();
+    ctx.stats.found[feature as usize] = hits as u64;
 }
 
 /// Triangles of `a` whose centroid is inside convex `b`, as one contact: the mean of those

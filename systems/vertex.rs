@@ -14,7 +14,7 @@ use hecs::World;
 /// - Paper: vertex test; PHYSICS.md §1.4 and erratum E5.
 /// - Cost: O(V_A·F_B + V_B·F_A) per candidate pair.
 pub fn vertex(_world: &mut World, ctx: &mut StepContext) {
-    super::face::detect(ctx, vertex_contact);
+    super::face::detect(ctx, vertex_contact, Feature::Vertex);
 }
 
 /// All vertices of `a` inside convex `b` as one contact: their mean point, the outward normal
