@@ -97,8 +97,6 @@ pub struct PosedCache {
     fresh: Vec<bool>,
     /// Scratch: body i is in a candidate pair.
     wanted: Vec<bool>,
-    /// Copy of each entry's bounds in one compact array, for cheap first checks on pairs.
-    bounds: Vec<(Vector, Vector)>,
 }
 
 impl PosedCache {
@@ -107,12 +105,6 @@ impl PosedCache {
     pub fn get(&self, i: u32) -> &Posed {
         debug_assert!(self.fresh[i as usize], "body {i} was not posed this step");
         &self.entries[i as usize]
-    }
-
-    /// World bounds of body `i`'s vertices, as in `get(i).bounds` but from a compact array.
-    #[must_use]
-    pub fn bounds(&self, i: u32) -> (Vector, Vector) {
-        self.bounds[i as usize]
     }
 
     fn reset(&mut self, meshes: &MeshTable, bodies: &Bodies) {
@@ -125,8 +117,6 @@ impl PosedCache {
         self.fresh.resize(bodies.len(), false);
         self.wanted.clear();
         self.wanted.resize(bodies.len(), false);
-        self.bounds.clear();
-        self.bounds.extend(self.entries.iter().map(|p| p.bounds));
     }
 }
 
@@ -327,11 +317,10 @@ impl StepContext {
             cache.wanted[p.b as usize] = true;
         }
         let bodies = &self.bodies;
-        let rows = cache.entries.par_iter_mut().zip(cache.bounds.par_iter_mut()).zip(cache.fresh.par_iter_mut());
-        rows.zip(cache.wanted.par_iter()).enumerate().for_each(|(i, (((posed, bounds), fresh), &wanted))| {
+        let rows = cache.entries.par_iter_mut().zip(cache.fresh.par_iter_mut());
+        rows.zip(cache.wanted.par_iter()).enumerate().for_each(|(i, ((posed, fresh), &wanted))| {
             if wanted && !*fresh {
                 posed.update(&Pose { position: bodies.position[i], orientation: bodies.orientation[i] });
-                *bounds = posed.bounds;
                 *fresh = true;
             }
         });
