@@ -4,7 +4,7 @@
 
 use crate::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
 use crate::math::{Mat3, Quat, Scalar, Vector, world_inverse_inertia};
-use crate::mesh::MeshId;
+use crate::mesh::{MeshId, MeshTable};
 use hecs::{Entity, World};
 
 /// Structure of arrays, one row per actor.
@@ -63,6 +63,19 @@ impl Bodies {
     #[must_use]
     pub fn is_fixed(&self, i: usize) -> bool {
         self.inv_mass[i] == 0.0
+    }
+
+    /// A pair's friction coefficient: the mean of its two actors' (CONTRACTS.md §2).
+    #[must_use]
+    pub fn pair_friction(&self, a: usize, b: usize) -> Scalar {
+        0.5 * (self.friction[a] + self.friction[b])
+    }
+
+    /// The thickness of the thinner of two bodies [m]: slops, margins and caps of the contact
+    /// stages scale with it.
+    #[must_use]
+    pub fn thinner(&self, meshes: &MeshTable, a: usize, b: usize) -> Scalar {
+        meshes.get(self.mesh[a]).thickness.min(meshes.get(self.mesh[b]).thickness)
     }
 
     /// Copies every actor's components into the arrays, reusing their allocations. Actor

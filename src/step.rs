@@ -240,6 +240,8 @@ pub struct SolveScratch {
     pub pseudo: Vec<(Vector, Vector)>,
     /// Accumulated split impulses, by row.
     pub lambda: Vec<Scalar>,
+    /// Split-impulse target separation speeds, by row [m/s].
+    pub targets: Vec<Scalar>,
 }
 
 /// Reused allocations of the shipped systems.

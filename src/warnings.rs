@@ -33,7 +33,7 @@ fn overlaps(sim: &mut Sim) -> Vec<String> {
     for pair in &ctx.pairs {
         let Some(c) = pair.contact() else { continue };
         let (a, b) = (pair.a as usize, pair.b as usize);
-        let thin = ctx.meshes.get(ctx.bodies.mesh[a]).thickness.min(ctx.meshes.get(ctx.bodies.mesh[b]).thickness);
+        let thin = ctx.bodies.thinner(&ctx.meshes, a, b);
         if c.depth > OVERLAP_TOLERANCE * thin {
             out.push(format!("actors '{}' and '{}' start overlapping by {:.3e} m", names[a], names[b], c.depth));
         }

@@ -33,7 +33,7 @@ pub fn correct(world: &mut World, ctx: &mut StepContext) {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let b = &ctx.bodies;
         let (wa, wb) = (b.inv_mass[ia], b.inv_mass[ib]);
-        let thickness = ctx.meshes.get(b.mesh[ia]).thickness.min(ctx.meshes.get(b.mesh[ib]).thickness);
+        let thickness = b.thinner(&ctx.meshes, ia, ib);
         let c = correction(contact.depth, thickness, &ctx.params);
         if c <= 0.0 || wa + wb == 0.0 {
             continue;
@@ -68,12 +68,16 @@ fn split_impulses(ctx: &mut StepContext) {
     let b = &ctx.bodies;
     s.lambda.clear();
     s.lambda.resize(s.rows.len(), 0.0);
+    // Each row's separation speed, once: capped like the paper-pair correction, so a wrong
+    // normal must not throw a body away.
+    s.targets.clear();
+    s.targets.extend(s.rows.iter().map(|row| {
+        let thin = b.thinner(&ctx.meshes, row.a as usize, row.b as usize);
+        (beta * (-row.gap - slop * thin)).clamp(0.0, cap * thin) / dt
+    }));
     for _ in 0..ctx.params.iterations {
-        for (row, acc) in s.rows.iter().zip(&mut s.lambda) {
+        for ((row, acc), &target) in s.rows.iter().zip(&mut s.lambda).zip(&s.targets) {
             let (ia, ib) = (row.a as usize, row.b as usize);
-            let thin = ctx.meshes.get(b.mesh[ia]).thickness.min(ctx.meshes.get(b.mesh[ib]).thickness);
-            // Capped like the paper-pair correction: a wrong normal must not throw a body away.
-            let target = (beta * (-row.gap - slop * thin)).clamp(0.0, cap * thin) / dt;
             let ((va, wa), (vb, wb)) = (s.pseudo[ia], s.pseudo[ib]);
             let n = &row.axes[0];
             let u = (va - vb).dot(n.dir) + wa.dot(n.arm[0]) - wb.dot(n.arm[1]);

@@ -110,9 +110,8 @@ pub fn boxes_separated(a: &BoxPose, b: &BoxPose, margin: Scalar) -> bool {
 fn pair_margin(p: &Pair, b: &Bodies, meshes: &MeshTable, params: &Params, dt: Scalar) -> Scalar {
     let (ia, ib) = (p.a as usize, p.b as usize);
     let proof = PRUNE_MARGIN * (b.radius[ia] + b.radius[ib]);
-    if params.resting_contacts(dt, 0.5 * (b.friction[ia] + b.friction[ib])) {
-        let thin = meshes.get(b.mesh[ia]).thickness.min(meshes.get(b.mesh[ib]).thickness);
-        proof.max(params.contact_margin * thin)
+    if params.resting_contacts(dt, b.pair_friction(ia, ib)) {
+        proof.max(params.contact_margin * b.thinner(meshes, ia, ib))
     } else {
         proof
     }

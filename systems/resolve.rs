@@ -93,7 +93,7 @@ pub fn resolve(world: &mut World, ctx: &mut StepContext) {
             let e = 0.5 * (b.restitution[ia] + b.restitution[ib]);
             // An inelastic impact where `solve` runs is left to it: it stops the approach over
             // the whole manifold, where one impulse at one point would set the body turning.
-            let held = e == 0.0 && ctx.params.resting_contacts(ctx.dt, 0.5 * (b.friction[ia] + b.friction[ib]));
+            let held = e == 0.0 && ctx.params.resting_contacts(ctx.dt, b.pair_friction(ia, ib));
             if held || approach_speed(&sa, &sb, &contact) <= threshold {
                 continue;
             }

@@ -31,7 +31,7 @@ const MATCH_DISTANCE: Scalar = 0.05;
 /// - Cost: O(P) to build P points, O(P · iterations) to solve.
 pub fn solve(world: &mut World, ctx: &mut StepContext) {
     let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
-    let resting = |p: &Pair| params.resting_contacts(dt, 0.5 * (b.friction[p.a as usize] + b.friction[p.b as usize]));
+    let resting = |p: &Pair| params.resting_contacts(dt, b.pair_friction(p.a as usize, p.b as usize));
     let s = &mut ctx.scratch.solve;
     s.step = ctx.step;
     s.pairs.clear();
@@ -50,7 +50,7 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
     s.near.extend(s.pairs.iter().map(Pair::is_candidate));
     s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut()).for_each_init(Vec::new, |scratch, (pair, m)| {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
-        let thin = meshes.get(b.mesh[pair.a as usize]).thickness.min(meshes.get(b.mesh[pair.b as usize]).thickness);
+        let thin = b.thinner(meshes, pair.a as usize, pair.b as usize);
         // A pair the tests passed over may still be resting a hair apart: hold it speculatively
         // along the face normal that separates it (a touching pair's contact is the tests').
         let near = pair.is_candidate();
@@ -96,7 +96,7 @@ fn build_rows(ctx: &mut StepContext) {
         let Some(contact) = pair.contact() else { continue }; // a candidate found not near
         let n = contact.normal;
         let (t1, t2) = tangents(n);
-        let mu = 0.5 * (b.friction[ia] + b.friction[ib]);
+        let mu = b.pair_friction(ia, ib);
         let inv_mass = [b.inv_mass[ia], b.inv_mass[ib]];
         let inv_inertia = [&b.inv_inertia_world[ia], &b.inv_inertia_world[ib]];
         let cached = s.cache.get(&(pair.a, pair.b));
