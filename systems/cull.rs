@@ -64,13 +64,13 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
     if s.chunks.len() < chunks {
         s.chunks.resize_with(chunks, Vec::new);
     }
-    let (large, cells) = (&s.large, (&s.cell_start, &s.order, &s.cell_of));
+    let (large, cell_start, order) = (&s.large, &s.cell_start, &s.order);
     s.chunks[..chunks].par_iter_mut().enumerate().for_each(|(c, out)| {
         out.clear();
         for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-            let start = out.len();
-            grid.pairs_of(i, b, cells, large, out);
-            out[start..].sort_unstable_by_key(|&(_, b)| b);
+            let first = out.len();
+            grid.pairs_of(i, b, (cell_start, order), large, out);
+            out[first..].sort_unstable_by_key(|&(_, b)| b);
         }
     });
     for chunk in &s.chunks[..chunks] {
@@ -163,18 +163,21 @@ impl Grid {
         &self,
         i: usize,
         b: &crate::bodies::Bodies,
-        (start, order, _): (&Vec<u32>, &Vec<CellEntry>, &Vec<u32>),
+        (start, order): (&[u32], &[CellEntry]),
         large: &[u32],
         out: &mut Vec<(u32, u32)>,
     ) {
         let (xi, ri, fixed_i) = (b.position[i], b.radius[i], b.is_fixed(i));
-        let test = |j: usize, out: &mut Vec<(u32, u32)>| {
-            if j > i && !(b.is_fixed(i) && b.is_fixed(j)) && spheres_overlap(xi, ri, b.position[j], b.radius[j]) {
+        // The candidate test of `cull_all_pairs`, given body j's centre, radius and fixedness.
+        let consider = |j: usize, xj: Vector, rj: Scalar, fixed_j: bool, out: &mut Vec<(u32, u32)>| {
+            if j > i && !(fixed_i && fixed_j) && spheres_overlap(xi, ri, xj, rj) {
                 out.push((i as u32, j as u32));
             }
         };
+        let consider_row =
+            |j: usize, out: &mut Vec<(u32, u32)>| consider(j, b.position[j], b.radius[j], b.is_fixed(j), out);
         if ri > self.threshold {
-            (i + 1..b.len()).for_each(|j| test(j, out));
+            (i + 1..b.len()).for_each(|j| consider_row(j, out));
             return;
         }
         let c = self.coords(xi);
@@ -184,15 +187,12 @@ impl Grid {
                 let row = self.index([0, y, z]);
                 let (x0, x1) = (*range(0).start(), *range(0).end());
                 for e in &order[start[row + x0] as usize..start[row + x1 + 1] as usize] {
-                    let j = e.index as usize;
-                    if j > i && !(fixed_i && e.fixed) && spheres_overlap(xi, ri, e.position, e.radius) {
-                        out.push((i as u32, e.index));
-                    }
+                    consider(e.index as usize, e.position, e.radius, e.fixed, out);
                 }
             }
         }
         for &j in large {
-            test(j as usize, out);
+            consider_row(j as usize, out);
         }
     }
 }
