@@ -306,12 +306,9 @@ impl StepContext {
         self.pose_pairs(Pair::is_candidate);
     }
 
-    /// Poses every body of a pair that has a contact (for systems after the detectors).
-    pub fn pose_contacts(&mut self) {
-        self.pose_pairs(|p| p.contact().is_some());
-    }
-
-    fn pose_pairs(&mut self, want: impl Fn(&Pair) -> bool) {
+    /// Poses every body of the pairs `want` picks that was not posed since it last moved (for
+    /// systems after the detectors, e.g. pairs with a contact).
+    pub fn pose_pairs(&mut self, want: impl Fn(&Pair) -> bool) {
         let cache = &mut self.posed;
         cache.wanted.iter_mut().for_each(|w| *w = false);
         for p in self.pairs.iter().filter(|p| want(p)) {

@@ -40,8 +40,7 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
         s.cache.clear();
         return;
     }
-    ctx.pose_contacts();
-    ctx.pose_candidates();
+    ctx.pose_pairs(|p| p.contact().is_some() || p.is_candidate());
     let s = &mut ctx.scratch.solve;
     let (posed, meshes, b) = (&ctx.posed, &ctx.meshes, &ctx.bodies);
     let margin = ctx.params.contact_margin;
