@@ -53,6 +53,7 @@ pub fn build(scene: &SceneDef, path: &Path) -> Result<Sim, SceneError> {
         max_sweeps: scene.solver.max_sweeps,
         correction: scene.solver.correction,
         slop: scene.solver.slop,
+        substeps: scene.solver.substeps,
         iterations: scene.solver.iterations,
         restitution_threshold: scene.solver.restitution_threshold,
         ..Params::default()

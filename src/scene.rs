@@ -90,7 +90,9 @@ pub struct SolverDef {
     pub correction: Scalar,
     /// Penetration left alone, fraction of the thinner body, 0..=1 (default 0.0005).
     pub slop: Scalar,
-    /// Iterations of the resting-contact solver `solve`, 1..=1000 (default 30).
+    /// Substeps of the resting-contact solver `solve`, 1..=64 (default 8).
+    pub substeps: u32,
+    /// Solver sweeps per substep of `solve`, 1..=1000 (default 1).
     pub iterations: u32,
     /// Approach speed [m/s] above which contacts bounce (default 2|g|·dt).
     pub restitution_threshold: Option<Scalar>,
@@ -103,6 +105,7 @@ impl Default for SolverDef {
             max_sweeps: p.max_sweeps,
             correction: p.correction,
             slop: p.slop,
+            substeps: p.substeps,
             iterations: p.iterations,
             restitution_threshold: p.restitution_threshold,
         }
@@ -449,6 +452,9 @@ fn check_scene(scene: &SceneDef, path: &Path) -> Result<(), SceneError> {
     let s = scene.solver;
     if !(1..=1000).contains(&s.max_sweeps) {
         return Err(invalid(path, "scene", "solver.max_sweeps", format!("must be 1..=1000, got {}", s.max_sweeps)));
+    }
+    if !(1..=64).contains(&s.substeps) {
+        return Err(invalid(path, "scene", "solver.substeps", format!("must be 1..=64, got {}", s.substeps)));
     }
     if !(1..=1000).contains(&s.iterations) {
         return Err(invalid(path, "scene", "solver.iterations", format!("must be 1..=1000, got {}", s.iterations)));

@@ -28,7 +28,7 @@ pub fn correct(world: &mut World, ctx: &mut StepContext) {
         let pair = ctx.pairs[k];
         let Some(contact) = pair.contact() else { continue };
         if held && ctx.scratch.solve.pairs.binary_search_by_key(&(pair.a, pair.b), |p| (p.a, p.b)).is_ok() {
-            continue; // held by `solve`: corrected below, at its manifold points
+            continue; // held by `solve`, whose soft contacts push penetration out
         }
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let b = &ctx.bodies;
@@ -45,59 +45,8 @@ pub fn correct(world: &mut World, ctx: &mut StepContext) {
         ctx.mark_moved(ib);
         moved = true;
     }
-    if held {
-        split_impulses(ctx);
-        moved = true;
-    }
     if moved {
         ctx.bodies.store(world);
-    }
-}
-
-/// Removes penetration at `solve`'s manifold points with split impulses (Catto's "split
-/// impulse"; Bullet): impulses on separate pseudo-velocities, clamped like contact impulses,
-/// turned into a displacement and a rotation over one step and then dropped. The real
-/// velocities never see them, so resting bodies neither gain energy nor pop apart, and a
-/// tilted box is turned back flat rather than only pushed up at one corner.
-fn split_impulses(ctx: &mut StepContext) {
-    let (dt, beta, slop, cap) = (ctx.dt, ctx.params.correction, ctx.params.slop, ctx.params.max_correction);
-    let n = ctx.bodies.len();
-    let s = &mut ctx.scratch.solve;
-    s.pseudo.clear();
-    s.pseudo.resize(n, (Vector::ZERO, Vector::ZERO));
-    let b = &ctx.bodies;
-    s.lambda.clear();
-    s.lambda.resize(s.rows.len(), 0.0);
-    // Each row's separation speed, once: capped like the paper-pair correction, so a wrong
-    // normal must not throw a body away.
-    s.targets.clear();
-    s.targets.extend(s.rows.iter().map(|row| {
-        let thin = b.thinner(&ctx.meshes, row.a as usize, row.b as usize);
-        (beta * (-row.gap - slop * thin)).clamp(0.0, cap * thin) / dt
-    }));
-    for _ in 0..ctx.params.iterations {
-        for ((row, acc), &target) in s.rows.iter().zip(&mut s.lambda).zip(&s.targets) {
-            let (ia, ib) = (row.a as usize, row.b as usize);
-            let ((va, wa), (vb, wb)) = (s.pseudo[ia], s.pseudo[ib]);
-            let n = &row.axes[0];
-            let u = (va - vb).dot(n.dir) + wa.dot(n.arm[0]) - wb.dot(n.arm[1]);
-            let next = (*acc + (target - u) * n.mass).max(0.0);
-            let dj = next - *acc;
-            *acc = next;
-            s.pseudo[ia].0 += n.dir * (dj * row.inv_mass[0]);
-            s.pseudo[ia].1 += n.spin[0] * dj;
-            s.pseudo[ib].0 -= n.dir * (dj * row.inv_mass[1]);
-            s.pseudo[ib].1 -= n.spin[1] * dj;
-        }
-    }
-    for i in 0..n {
-        let (v, w) = ctx.scratch.solve.pseudo[i];
-        if v != Vector::ZERO || w != Vector::ZERO {
-            let b = &mut ctx.bodies;
-            b.position[i] += v * dt;
-            b.orientation[i] = (crate::math::exp_map(w * dt) * b.orientation[i]).normalize();
-            ctx.mark_moved(i);
-        }
     }
 }
 

@@ -23,17 +23,26 @@ pub fn spheres_overlap(xa: Vector, ra: Scalar, xb: Vector, rb: Scalar) -> bool {
 /// - Reads: `ctx.bodies`. Writes: `ctx.pairs` (appends `Candidate`s, sorted), `ctx.stats`.
 /// - Paper: bounding box check; PHYSICS.md §1.2, E1. Cost: O(N²).
 pub fn cull_all_pairs(_world: &mut World, ctx: &mut StepContext) {
-    let b = &ctx.bodies;
+    reach(ctx);
+    let (b, reach) = (&ctx.bodies, &ctx.scratch.cull.reach);
     for i in 0..b.len() {
         for j in i + 1..b.len() {
-            if !(b.is_fixed(i) && b.is_fixed(j))
-                && spheres_overlap(b.position[i], b.radius[i], b.position[j], b.radius[j])
-            {
+            if !(b.is_fixed(i) && b.is_fixed(j)) && spheres_overlap(b.position[i], reach[i], b.position[j], reach[j]) {
                 ctx.pairs.push(Pair::candidate(i as u32, j as u32));
             }
         }
     }
     ctx.stats.candidates = ctx.pairs.len();
+}
+
+/// Fills `ctx.scratch.cull.reach`: each bounding radius widened by the body's speculative
+/// distance (`Params::speculative_distance`; zero without gravity and friction, so the paper's
+/// frictionless scenes see the paper's spheres).
+fn reach(ctx: &mut StepContext) {
+    let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
+    let reach = &mut ctx.scratch.cull.reach;
+    reach.clear();
+    reach.extend((0..b.len()).map(|i| b.radius[i] + params.speculative_distance(dt, b, i)));
 }
 
 /// Radii more than this many times the median go on the short "large" list tested against
@@ -54,12 +63,14 @@ const CHUNK: usize = 1024;
 /// - Cost: O(N) to bin, O(N·k) for k neighbours per body, plus O(N·L) for L large bodies.
 pub fn cull(_world: &mut World, ctx: &mut StepContext) {
     let n = ctx.bodies.len();
+    reach(ctx);
     let s = &mut ctx.scratch.cull;
     let b = &ctx.bodies;
-    let threshold = large_threshold(&b.radius, &mut s.radii);
+    let reach = std::mem::take(&mut s.reach);
+    let threshold = large_threshold(&reach, &mut s.radii);
     s.large.clear();
-    s.large.extend((0..n as u32).filter(|&i| b.radius[i as usize] > threshold));
-    let grid = Grid::build(b, threshold, s);
+    s.large.extend((0..n as u32).filter(|&i| reach[i as usize] > threshold));
+    let grid = Grid::build(b, &reach, threshold, s);
     let chunks = n.div_ceil(CHUNK);
     if s.chunks.len() < chunks {
         s.chunks.resize_with(chunks, Vec::new);
@@ -69,13 +80,14 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
         out.clear();
         for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
             let first = out.len();
-            grid.pairs_of(i, b, (cell_start, order), large, out);
+            grid.pairs_of(i, b, &reach, (cell_start, order), large, out);
             out[first..].sort_unstable_by_key(|&(_, b)| b);
         }
     });
     for chunk in &s.chunks[..chunks] {
         ctx.pairs.extend(chunk.iter().map(|&(a, b)| Pair::candidate(a, b)));
     }
+    s.reach = reach;
     ctx.stats.candidates = ctx.pairs.len();
 }
 
@@ -101,15 +113,15 @@ struct Grid {
 }
 
 impl Grid {
-    fn build(b: &crate::bodies::Bodies, threshold: Scalar, s: &mut CullScratch) -> Self {
-        let ordinary = || (0..b.len()).filter(|&i| b.radius[i] <= threshold);
+    fn build(b: &crate::bodies::Bodies, radius: &[Scalar], threshold: Scalar, s: &mut CullScratch) -> Self {
+        let ordinary = || (0..b.len()).filter(|&i| radius[i] <= threshold);
         let (mut lo, mut hi, mut r_max) =
             (Vector::splat(Scalar::INFINITY), Vector::splat(Scalar::NEG_INFINITY), 0.0_f64);
         let mut count = 0;
         for i in ordinary() {
             lo = lo.min(b.position[i]);
             hi = hi.max(b.position[i]);
-            r_max = r_max.max(b.radius[i]);
+            r_max = r_max.max(radius[i]);
             count += 1;
         }
         // Two overlapping ordinary spheres have centres at most 2·r_max apart: with cells at
@@ -143,7 +155,7 @@ impl Grid {
         for i in ordinary() {
             let c = s.cell_of[i] as usize;
             s.order[s.fill[c] as usize] =
-                CellEntry { position: b.position[i], radius: b.radius[i], index: i as u32, fixed: b.is_fixed(i) };
+                CellEntry { position: b.position[i], radius: radius[i], index: i as u32, fixed: b.is_fixed(i) };
             s.fill[c] += 1;
         }
         grid
@@ -163,11 +175,12 @@ impl Grid {
         &self,
         i: usize,
         b: &crate::bodies::Bodies,
+        radius: &[Scalar],
         (start, order): (&[u32], &[CellEntry]),
         large: &[u32],
         out: &mut Vec<(u32, u32)>,
     ) {
-        let (xi, ri, fixed_i) = (b.position[i], b.radius[i], b.is_fixed(i));
+        let (xi, ri, fixed_i) = (b.position[i], radius[i], b.is_fixed(i));
         // The candidate test of `cull_all_pairs`, given body j's centre, radius and fixedness.
         let consider = |j: usize, xj: Vector, rj: Scalar, fixed_j: bool, out: &mut Vec<(u32, u32)>| {
             if j > i && !(fixed_i && fixed_j) && spheres_overlap(xi, ri, xj, rj) {
@@ -175,7 +188,7 @@ impl Grid {
             }
         };
         let consider_row =
-            |j: usize, out: &mut Vec<(u32, u32)>| consider(j, b.position[j], b.radius[j], b.is_fixed(j), out);
+            |j: usize, out: &mut Vec<(u32, u32)>| consider(j, b.position[j], radius[j], b.is_fixed(j), out);
         if ri > self.threshold {
             (i + 1..b.len()).for_each(|j| consider_row(j, out));
             return;

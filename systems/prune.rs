@@ -111,7 +111,8 @@ fn pair_margin(p: &Pair, b: &Bodies, meshes: &MeshTable, params: &Params, dt: Sc
     let (ia, ib) = (p.a as usize, p.b as usize);
     let proof = PRUNE_MARGIN * (b.radius[ia] + b.radius[ib]);
     if params.resting_contacts(dt, b.pair_friction(ia, ib)) {
-        proof.max(params.contact_margin * b.thinner(meshes, ia, ib))
+        let speculative = params.speculative_distance(dt, b, ia) + params.speculative_distance(dt, b, ib);
+        proof.max(params.contact_margin * b.thinner(meshes, ia, ib) + speculative)
     } else {
         proof
     }

@@ -1,19 +1,25 @@
 //! `solve`: resting contact and friction, the paper's "future work". Sequential impulses over
 //! contact manifolds (up to four points a pair), with accumulated normal impulses clamped at
 //! zero and Coulomb friction clamped to the cone |j_t| ≤ μ j_n, warm-started from the previous
-//! step's impulses (Catto, "Iterative Dynamics with Temporal Coherence", 2005).
+//! step's impulses (Catto, "Iterative Dynamics with Temporal Coherence", 2005), solved as a
+//! "soft step" (Catto, "Solver2D", 2024; Box2D v3; rapier's TGS): the step is cut into
+//! substeps, penetration is pushed out by a stiff damped spring and a rigid relax pass takes
+//! the push-out velocity back, so penetration is removed without adding energy.
+//!
+//! Each pair is held along its least-overlap axis (`manifold::contact_axis`), not the detection
+//! tests' normal, with speculative points for gaps that may close within the step
+//! (`Params::speculative_distance`). Rows are solved lowest first, so one sweep carries a
+//! stack's support from the ground up.
 //!
 //! It takes the contacts `resolve` leaves: under gravity every contact (impacts were bounced
 //! there, resting ones are held here with no bounce), and contacts with friction. Without
 //! gravity and friction it does nothing, so the paper's frictionless results are unchanged.
-//! Penetration is left to `correct`, which removes it with split impulses on these same rows:
-//! positions move, velocities do not, so no energy is added.
+//! `correct` leaves the pairs held here alone.
 
 use crate::bodies::Bodies;
 use crate::contact::{Contact, Feature, Pair, PairState};
-use crate::geometry::Posed;
-use crate::manifold::{Manifold, manifold, near_normal};
-use crate::math::{Scalar, Vector};
+use crate::manifold::{Manifold, contact_axis, manifold, support_point};
+use crate::math::{Scalar, Vector, exp_map};
 use crate::step::{CachedManifold, CachedPoint, RowAxis, SolverRow, StepContext};
 use hecs::World;
 use rayon::prelude::*;
@@ -25,10 +31,10 @@ const MATCH_DISTANCE: Scalar = 0.05;
 /// Holds resting contacts and applies friction (see the module docs).
 ///
 /// - Reads: `ctx.pairs` (`Found`, `Resolved`), `ctx.posed`, `ctx.bodies`, `ctx.scratch.solve`.
-/// - Writes: `ctx.bodies` velocities (and the world's), `ctx.stats.impulses` (one per pair
-///   held), the warm-start cache.
+/// - Writes: `ctx.bodies` velocities and the poses of the bodies it holds (and the world's),
+///   `ctx.stats.impulses` (one per pair held), the warm-start cache.
 /// - Paper: none (resting contact and friction are the paper's future work).
-/// - Cost: O(P) to build P points, O(P · iterations) to solve.
+/// - Cost: O(P) to build P points, O(P · substeps · (iterations + 2)) to solve.
 pub fn solve(world: &mut World, ctx: &mut StepContext) {
     let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
     let resting = |p: &Pair| params.resting_contacts(dt, b.pair_friction(p.a as usize, p.b as usize));
@@ -42,46 +48,40 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
     }
     ctx.pose_pairs(|p| p.contact().is_some() || p.is_candidate());
     let s = &mut ctx.scratch.solve;
-    let (posed, meshes, b) = (&ctx.posed, &ctx.meshes, &ctx.bodies);
-    let margin = ctx.params.contact_margin;
+    let (posed, meshes, b, params, dt) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params, ctx.dt);
+    let margin = params.contact_margin;
     s.manifolds.resize(s.pairs.len(), Manifold::default());
     s.near.clear();
     s.near.extend(s.pairs.iter().map(Pair::is_candidate));
     s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut()).for_each_init(Vec::new, |scratch, (pair, m)| {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
         let thin = b.thinner(meshes, pair.a as usize, pair.b as usize);
-        // A pair the tests passed over may still be resting a hair apart: hold it speculatively
-        // along the face normal that separates it (a touching pair's contact is the tests').
-        let near = pair.is_candidate();
-        if near {
-            let Some((normal, _)) = near_normal(pa, pb, margin * thin) else {
-                m.len = 0;
-                return;
-            };
-            pair.state = PairState::Resolved(near_contact(pa, pb, normal));
-        }
-        let contact = pair.contact().expect("a contact by now");
-        *m = manifold(pa, pb, contact.normal, margin * thin, scratch);
-        if m.len == 0 && !near {
-            // No vertex in or near the other body (an edge crossing an edge): hold the contact
-            // the tests found, at its depth. A near pair without such vertices is not held.
-            (m.points[0], m.gaps[0], m.len) = (contact.point, -contact.depth, 1);
+        // Held along the pair's least-overlap axis (see `contact_axis`), touching or a hair
+        // apart (speculatively); the tests' own normal and depth decide only that it touches.
+        let (ia, ib) = (pair.a as usize, pair.b as usize);
+        let reach = margin * thin + params.speculative_distance(dt, b, ia) + params.speculative_distance(dt, b, ib);
+        let Some(axis) = contact_axis(pa, pb, reach) else {
+            m.len = 0;
+            pair.state = PairState::Candidate; // apart: no rows
+            return;
+        };
+        let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
+        let point = support_point(pa, pb, &axis);
+        pair.state = PairState::Resolved(Contact { point, normal: axis.normal, depth: -axis.separation, feature });
+        *m = if axis.edge {
+            Manifold::default()
+        } else {
+            manifold(pa, pb, axis.normal, (margin * thin, reach), scratch)
+        };
+        if m.len == 0 {
+            // Edge across edge, or no vertex on the other body: one point where they meet.
+            (m.points[0], m.gaps[0], m.len) = (point, axis.separation, 1);
         }
     });
     build_rows(ctx);
-    warm_start(ctx);
-    for k in 0..ctx.params.iterations {
-        iterate(ctx, k % 2 == 1);
-    }
+    substeps(ctx);
     remember(ctx);
     ctx.bodies.store(world);
-}
-
-/// The contact of a near pair: its normal is what matters (the manifold's vertices are its
-/// points); the point is halfway between the centres and is never used as a manifold point.
-fn near_contact(a: &Posed, b: &Posed, normal: Vector) -> Contact {
-    let point = 0.5 * (a.position + b.position);
-    Contact { point, normal, depth: 0.0, feature: Feature::Face }
 }
 
 /// One row per manifold point: lever arms, tangent basis, effective masses, and the impulses
@@ -90,15 +90,28 @@ fn build_rows(ctx: &mut StepContext) {
     let b = &ctx.bodies;
     let s = &mut ctx.scratch.solve;
     s.rows.clear();
-    for ((pair, m), &near) in s.pairs.iter().zip(&s.manifolds).zip(&s.near) {
+    // Lowest contacts first: each forward sweep then carries the support up a stack in one
+    // pass. The order matters: top-down sweeps let a tall pyramid wobble. Ties keep pair order.
+    let up = -ctx.params.gravity.normalize_or_zero();
+    s.order.clear();
+    s.order.extend(s.manifolds.iter().enumerate().map(|(k, m)| {
+        let height = m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len.max(1) as Scalar;
+        (height, k as u32)
+    }));
+    s.order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    s.spans.clear();
+    for &(_, k) in &s.order {
+        let (pair, m, near) = (&s.pairs[k as usize], &s.manifolds[k as usize], s.near[k as usize]);
         let (ia, ib) = (pair.a as usize, pair.b as usize);
-        let Some(contact) = pair.contact() else { continue }; // a candidate found not near
+        let Some(contact) = pair.contact() else { continue }; // apart along some axis
         let n = contact.normal;
         let (t1, t2) = tangents(n);
         let mu = b.pair_friction(ia, ib);
+        let thin = b.thinner(&ctx.meshes, ia, ib);
         let inv_mass = [b.inv_mass[ia], b.inv_mass[ib]];
         let inv_inertia = [&b.inv_inertia_world[ia], &b.inv_inertia_world[ib]];
         let cached = s.cache.get(&(pair.a, pair.b));
+        let start = s.rows.len();
         for (&p, &gap) in m.points().iter().zip(&m.gaps) {
             let r = [p - b.position[ia], p - b.position[ib]];
             let axis = |dir: Vector| {
@@ -120,8 +133,13 @@ fn build_rows(ctx: &mut StepContext) {
                 axes: [axis(n), axis(t1), axis(t2)],
                 mu,
                 gap,
+                slop: ctx.params.slop * thin,
+                max_push: ctx.params.max_correction * thin / ctx.dt,
                 impulse: [jn, jt.dot(t1), jt.dot(t2)],
             });
+        }
+        if s.rows.len() > start {
+            s.spans.push((start as u32, (s.rows.len() - start) as u32));
         }
     }
 }
@@ -134,7 +152,7 @@ fn tangents(n: Vector) -> (Vector, Vector) {
 }
 
 /// Relative speed of A against B along `axis` at the row's point.
-#[inline]
+#[inline(always)]
 fn speed(b: &Bodies, row: &SolverRow, axis: &RowAxis) -> Scalar {
     let (ia, ib) = (row.a as usize, row.b as usize);
     (b.velocity[ia] - b.velocity[ib]).dot(axis.dir) + b.angular_velocity[ia].dot(axis.arm[0])
@@ -142,7 +160,7 @@ fn speed(b: &Bodies, row: &SolverRow, axis: &RowAxis) -> Scalar {
 }
 
 /// Applies an impulse of `j` along `axis` at the row's point: +j on A, −j on B.
-#[inline]
+#[inline(always)]
 fn push(b: &mut Bodies, row: &SolverRow, axis: &RowAxis, j: Scalar) {
     let (ia, ib) = (row.a as usize, row.b as usize);
     b.velocity[ia] += axis.dir * (j * row.inv_mass[0]);
@@ -151,50 +169,167 @@ fn push(b: &mut Bodies, row: &SolverRow, axis: &RowAxis, j: Scalar) {
     b.angular_velocity[ib] -= axis.spin[1] * j;
 }
 
-/// Re-applies last step's impulses: a resting stack starts near its solution.
-fn warm_start(ctx: &mut StepContext) {
+/// Damping ratio of the soft contact (Box2D v3's default): heavily overdamped, so pushing a
+/// penetration out never overshoots into a bounce.
+const CONTACT_DAMPING_RATIO: Scalar = 10.0;
+
+/// Stiffness of the soft contact as a fraction of the substep rate: a quarter, Box2D v3's upper
+/// bound for a stable spring (120 Hz with 8 substeps of a 1/60 s step). A soft contact sinks
+/// under load by (load)/(effective mass · ω²), so the stiffest stable spring keeps a 40-row
+/// pyramid's bottom row within a millimetre or two.
+const CONTACT_HERTZ_PER_SUBSTEP_RATE: Scalar = 0.25;
+
+/// The soft-constraint coefficients of a contact for substep `h` (Catto, "Solver2D", 2024): a
+/// damped spring of `CONTACT_HERTZ_PER_SUBSTEP_RATE` written as a bias rate and mass/impulse scales.
+#[derive(Clone, Copy, Debug)]
+struct Softness {
+    bias_rate: Scalar,
+    mass_scale: Scalar,
+    impulse_scale: Scalar,
+}
+
+impl Softness {
+    fn new(h: Scalar) -> Self {
+        let omega = 2.0 * std::f64::consts::PI * CONTACT_HERTZ_PER_SUBSTEP_RATE / h;
+        let a1 = 2.0 * CONTACT_DAMPING_RATIO + h * omega;
+        let a2 = h * omega * a1;
+        let a3 = 1.0 / (1.0 + a2);
+        Self { bias_rate: omega / a1, mass_scale: a2 * a3, impulse_scale: a3 }
+    }
+}
+
+/// The substepped solve (a "soft step", as in Box2D v3 and rapier's TGS): the step is cut into
+/// `substeps` of length h. Each substep adds its share of gravity, re-applies the accumulated
+/// impulses, solves with soft position feedback from the gaps as they stand after the earlier
+/// substeps, moves the bodies' (virtual) displacements on, and relaxes: a rigid pass that takes
+/// back the push-out velocity so penetration is removed without adding energy. Positions then
+/// end where the substeps took them: `integrate` adds v·dt, so `solve` moves each body by the
+/// rest. Gravity's change of velocity, which the `gravity` system applied whole, is re-timed
+/// over the substeps (net change unchanged), so a stack's weight is carried substep by substep.
+fn substeps(ctx: &mut StepContext) {
+    let (params, dt) = (&ctx.params, ctx.dt);
+    let count = params.substeps.max(1);
+    let h = dt / Scalar::from(count);
+    let soft = Softness::new(h);
+    let s = &mut ctx.scratch.solve;
     let b = &mut ctx.bodies;
-    for row in &ctx.scratch.solve.rows {
+    s.moving.clear();
+    s.moving.extend(s.rows.iter().flat_map(|r| [r.a, r.b]).filter(|&i| b.inv_mass[i as usize] > 0.0));
+    s.moving.sort_unstable();
+    s.moving.dedup();
+    s.delta.clear();
+    s.delta.resize(b.len(), (Vector::ZERO, Vector::ZERO));
+    let (g_step, g_sub) = (params.gravity * dt, params.gravity * h);
+    for &i in &s.moving {
+        b.velocity[i as usize] -= g_step;
+    }
+    for _ in 0..count {
+        for &i in &s.moving {
+            b.velocity[i as usize] += g_sub;
+        }
+        warm_start(b, &s.rows);
+        for _ in 0..params.iterations {
+            iterate(b, &mut s.rows, &s.spans, &s.delta, h, Some(soft));
+        }
+        for &i in &s.moving {
+            let i = i as usize;
+            s.delta[i].0 += b.velocity[i] * h;
+            s.delta[i].1 += b.angular_velocity[i] * h;
+        }
+        iterate(b, &mut s.rows, &s.spans, &s.delta, h, None);
+    }
+    for &i in &s.moving {
+        let i = i as usize;
+        let (dx, dtheta) = s.delta[i];
+        b.position[i] += dx - b.velocity[i] * dt;
+        b.orientation[i] = (exp_map(dtheta - b.angular_velocity[i] * dt) * b.orientation[i]).normalize();
+    }
+    for i in 0..ctx.scratch.solve.moving.len() {
+        ctx.mark_moved(ctx.scratch.solve.moving[i] as usize);
+    }
+}
+
+/// Re-applies the accumulated impulses (last step's at the first substep): a resting stack
+/// starts each substep near its solution.
+fn warm_start(b: &mut Bodies, rows: &[SolverRow]) {
+    for row in rows {
         for (axis, &j) in row.axes.iter().zip(&row.impulse) {
             push(b, row, axis, j);
         }
     }
 }
 
-/// One Gauss–Seidel sweep, forwards or backwards through the rows (alternating, so the weight
-/// of a stack travels down as fast as the support travels up): friction at every point first
-/// (within the Coulomb cone of the current normal impulse), then the normal impulses that stop
-/// approach (accumulated, never pulling). Normal rows last, as in Box2D: non-penetration
-/// matters more than friction, so it gets the final word in each sweep.
-fn iterate(ctx: &mut StepContext, backwards: bool) {
-    let (b, rows, dt) = (&mut ctx.bodies, &mut ctx.scratch.solve.rows, ctx.dt);
-    if backwards {
-        rows.reverse();
-    }
-    for row in rows.iter_mut().filter(|r| r.mu > 0.0) {
-        let [_, t1, t2] = row.axes;
-        let (mut j1, mut j2) =
-            (row.impulse[1] - speed(b, row, &t1) * t1.mass, row.impulse[2] - speed(b, row, &t2) * t2.mass);
-        let limit = row.mu * row.impulse[0];
-        let len = (j1 * j1 + j2 * j2).sqrt();
-        if len > limit {
-            (j1, j2) = (j1 * limit / len, j2 * limit / len);
+/// One Gauss–Seidel sweep through the rows, lowest contacts first (see `build_rows`). At
+/// each point the normal impulse first (accumulated, never pulling), then friction within the
+/// Coulomb cone of it.
+///
+/// The gap is the step's starting gap moved on by the substeps' displacements `delta`
+/// (linearised about the step's start). A gap still open may close within this substep
+/// (speculative contact, u_n ≥ −gap/h); a penetration is pushed out by the soft spring when
+/// `soft` is given (the solve pass), never faster than the row's cap, and not at all when it
+/// is `None` (the relax pass, which takes the push-out velocity back).
+fn iterate(
+    b: &mut Bodies,
+    rows: &mut [SolverRow],
+    spans: &[(u32, u32)],
+    delta: &[(Vector, Vector)],
+    h: Scalar,
+    soft: Option<Softness>,
+) {
+    for &(start, len) in spans {
+        let pair = &mut rows[start as usize..(start + len) as usize];
+        // The relax pass takes a pair's points in the reverse order, so neither end of a
+        // manifold is always first: a box landing flat is stopped evenly at its corners.
+        if soft.is_none() {
+            pair.iter_mut().rev().for_each(|row| solve_point(b, row, delta, h, soft));
+        } else {
+            pair.iter_mut().for_each(|row| solve_point(b, row, delta, h, soft));
         }
-        push(b, row, &t1, j1 - row.impulse[1]);
-        push(b, row, &t2, j2 - row.impulse[2]);
-        (row.impulse[1], row.impulse[2]) = (j1, j2);
     }
-    for row in rows.iter_mut() {
-        let n = row.axes[0];
-        // Speculative points may approach by their gap this step: u_n ≥ −gap/dt.
-        let u_n = speed(b, row, &n) + row.gap.max(0.0) / dt;
-        let jn = (row.impulse[0] - u_n * n.mass).max(0.0);
-        push(b, row, &n, jn - row.impulse[0]);
-        row.impulse[0] = jn;
+}
+
+/// One point: its normal impulse, then its friction.
+#[inline(always)]
+fn solve_point(b: &mut Bodies, row: &mut SolverRow, delta: &[(Vector, Vector)], h: Scalar, soft: Option<Softness>) {
+    normal_point(b, row, delta, h, soft);
+    if row.mu > 0.0 {
+        friction_point(b, row);
     }
-    if backwards {
-        rows.reverse();
+}
+
+/// The normal impulse at one point (see `iterate`).
+#[inline(always)]
+fn normal_point(b: &mut Bodies, row: &mut SolverRow, delta: &[(Vector, Vector)], h: Scalar, soft: Option<Softness>) {
+    let n = row.axes[0];
+    let ((pa, ta), (pb, tb)) = (delta[row.a as usize], delta[row.b as usize]);
+    let gap = row.gap + (pa - pb).dot(n.dir) + ta.dot(n.arm[0]) - tb.dot(n.arm[1]);
+    let (bias, mass_scale, impulse_scale) = match soft {
+        _ if gap > 0.0 => (gap / h, 1.0, 0.0),
+        Some(k) if gap + row.slop < 0.0 => {
+            ((k.bias_rate * (gap + row.slop)).max(-row.max_push), k.mass_scale, k.impulse_scale)
+        }
+        _ => (0.0, 1.0, 0.0),
+    };
+    let dj = -n.mass * mass_scale * (speed(b, row, &n) + bias) - impulse_scale * row.impulse[0];
+    let jn = (row.impulse[0] + dj).max(0.0);
+    push(b, row, &n, jn - row.impulse[0]);
+    row.impulse[0] = jn;
+}
+
+/// The friction impulse at one point, within the Coulomb cone of its normal impulse.
+#[inline(always)]
+fn friction_point(b: &mut Bodies, row: &mut SolverRow) {
+    let [_, t1, t2] = row.axes;
+    let (mut j1, mut j2) =
+        (row.impulse[1] - speed(b, row, &t1) * t1.mass, row.impulse[2] - speed(b, row, &t2) * t2.mass);
+    let limit = row.mu * row.impulse[0];
+    let len = (j1 * j1 + j2 * j2).sqrt();
+    if len > limit {
+        (j1, j2) = (j1 * limit / len, j2 * limit / len);
     }
+    push(b, row, &t1, j1 - row.impulse[1]);
+    push(b, row, &t2, j2 - row.impulse[2]);
+    (row.impulse[1], row.impulse[2]) = (j1, j2);
 }
 
 /// Keeps this step's impulses for the next step's warm start, and counts one impulse per pair

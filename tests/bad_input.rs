@@ -99,6 +99,8 @@ fn non_physical_values_name_the_actor_and_field() {
         ),
         ("gas.ron", "Scene(actors: [], spawners: [BoxGas(actors: 4000000000)])".into(), "limit"),
         ("steps.ron", format!("Scene(steps: 1000000000000, actors: [Actor({CUBE})])"), "steps"),
+        ("substeps.ron", format!("Scene(solver: Solver(substeps: 0), actors: [Actor({CUBE})])"), "solver.substeps"),
+        ("sweeps.ron", format!("Scene(solver: Solver(iterations: 0), actors: [Actor({CUBE})])"), "solver.iterations"),
     ];
     for (name, text, needle) in cases {
         rejects(&dir, name, text.as_bytes(), &[needle]);
