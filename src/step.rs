@@ -57,8 +57,7 @@ impl Params {
     /// on the floor instead of in it, and a fast cube does not end up half inside another.
     #[must_use]
     pub fn speculative_distance(&self, dt: Scalar, b: &crate::bodies::Bodies, i: usize) -> Scalar {
-        let held = self.restitution_threshold(dt) > 0.0 || b.friction[i] > 0.0;
-        if !held || b.inv_mass[i] == 0.0 {
+        if !self.resting_contacts(dt, b.friction[i]) || b.inv_mass[i] == 0.0 {
             return 0.0;
         }
         let speed = b.velocity[i].length() + self.gravity.length() * dt + b.angular_velocity[i].length() * b.radius[i];

@@ -151,12 +151,18 @@ fn tangents(n: Vector) -> (Vector, Vector) {
     (t1, n.cross(t1))
 }
 
+/// The relative motion of A against B along `axis` at the row's point, given each body's
+/// (linear, angular) pair: a speed from velocities, a displacement from the substeps' `delta`.
+#[inline(always)]
+fn along(axis: &RowAxis, (la, aa): (Vector, Vector), (lb, ab): (Vector, Vector)) -> Scalar {
+    (la - lb).dot(axis.dir) + aa.dot(axis.arm[0]) - ab.dot(axis.arm[1])
+}
+
 /// Relative speed of A against B along `axis` at the row's point.
 #[inline(always)]
 fn speed(b: &Bodies, row: &SolverRow, axis: &RowAxis) -> Scalar {
     let (ia, ib) = (row.a as usize, row.b as usize);
-    (b.velocity[ia] - b.velocity[ib]).dot(axis.dir) + b.angular_velocity[ia].dot(axis.arm[0])
-        - b.angular_velocity[ib].dot(axis.arm[1])
+    along(axis, (b.velocity[ia], b.angular_velocity[ia]), (b.velocity[ib], b.angular_velocity[ib]))
 }
 
 /// Applies an impulse of `j` along `axis` at the row's point: +j on A, −j on B.
@@ -301,8 +307,7 @@ fn solve_point(b: &mut Bodies, row: &mut SolverRow, delta: &[(Vector, Vector)], 
 #[inline(always)]
 fn normal_point(b: &mut Bodies, row: &mut SolverRow, delta: &[(Vector, Vector)], h: Scalar, soft: Option<Softness>) {
     let n = row.axes[0];
-    let ((pa, ta), (pb, tb)) = (delta[row.a as usize], delta[row.b as usize]);
-    let gap = row.gap + (pa - pb).dot(n.dir) + ta.dot(n.arm[0]) - tb.dot(n.arm[1]);
+    let gap = row.gap + along(&n, delta[row.a as usize], delta[row.b as usize]);
     let (bias, mass_scale, impulse_scale) = match soft {
         _ if gap > 0.0 => (gap / h, 1.0, 0.0),
         Some(k) if gap + row.slop < 0.0 => {
