@@ -329,7 +329,7 @@ fn bench(args: &BenchArgs) -> Result<(), AppError> {
         );
     }
     for size in sizes {
-        let r = crate::bench::run(scene, size, steps, warmup, args.seed, threads)?;
+        let r = crate::bench::run(scene, size, steps, warmup, args.seed, threads, args.sleep)?;
         if args.json {
             println!("{}", serde_json::to_string(&r).expect("plain data serialises"));
         } else {

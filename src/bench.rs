@@ -119,7 +119,7 @@ pub fn scene_sim(scene: BenchScene, size: u32, seed: u64) -> Sim {
 }
 
 /// Runs a benchmark scene: `warmup` untimed steps, then `steps` timed ones. Call it inside the
-/// rayon pool of the wanted thread count.
+/// rayon pool of the wanted thread count. `sleep` lets still bodies sleep (`Params::sleep`).
 pub fn run(
     scene: BenchScene,
     size: u32,
@@ -127,8 +127,10 @@ pub fn run(
     warmup: u64,
     seed: u64,
     threads: usize,
+    sleep: bool,
 ) -> Result<BenchResult, crate::error::StepError> {
     let mut sim = scene_sim(scene, size, seed);
+    sim.ctx.params.sleep = sleep;
     let cubes = scene.cubes(sim.len());
     let start: Vec<Vector> = sim.actors()[cubes.clone()].iter().map(|a| a.pose.position).collect();
     let ke_start = sim.totals().kinetic_energy;
@@ -176,7 +178,7 @@ pub fn run(
         warmup,
         seed,
         threads,
-        sleep: false,
+        sleep,
         mean_ms_per_step: mean,
         median_ms_per_step: median,
         ke_start,

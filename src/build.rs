@@ -55,6 +55,7 @@ pub fn build(scene: &SceneDef, path: &Path) -> Result<Sim, SceneError> {
         slop: scene.solver.slop,
         substeps: scene.solver.substeps,
         iterations: scene.solver.iterations,
+        sleep: scene.solver.sleep,
         restitution_threshold: scene.solver.restitution_threshold,
         ..Params::default()
     };

@@ -172,6 +172,10 @@ pub struct BenchArgs {
     /// One JSON object per line instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Let still bodies sleep (off by default, so the contact solver is measured on every
+    /// body; BENCHMARKS.md).
+    #[arg(long)]
+    pub sleep: bool,
     /// Also write the results as CSV to FILE.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,

@@ -94,6 +94,8 @@ pub struct SolverDef {
     pub substeps: u32,
     /// Solver sweeps per substep of `solve`, 1..=1000 (default 1).
     pub iterations: u32,
+    /// Still bodies sleep until touched in motion (the `sleep` system; default false).
+    pub sleep: bool,
     /// Approach speed [m/s] above which contacts bounce (default 2|g|·dt).
     pub restitution_threshold: Option<Scalar>,
 }
@@ -107,6 +109,7 @@ impl Default for SolverDef {
             slop: p.slop,
             substeps: p.substeps,
             iterations: p.iterations,
+            sleep: p.sleep,
             restitution_threshold: p.restitution_threshold,
         }
     }

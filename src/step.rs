@@ -35,6 +35,9 @@ pub struct Params {
     pub substeps: u32,
     /// Solver sweeps per substep of `solve` (one relax sweep follows them).
     pub iterations: u32,
+    /// Bodies that have been still for a while sleep (the `sleep` system): they are treated
+    /// as fixed until something touching them moves. Off by default.
+    pub sleep: bool,
     /// Distance within which two bodies count as in resting contact though apart, as a fraction
     /// of the thinner one's thickness: `prune` keeps such pairs and `solve` holds them
     /// (speculatively), so a stack does not lose a contact to a micro-bounce.
@@ -82,6 +85,7 @@ impl Default for Params {
             restitution_threshold: None,
             substeps: 8,
             iterations: 1,
+            sleep: false,
             contact_margin: 0.02,
         }
     }
@@ -274,6 +278,38 @@ pub struct SolveScratch {
     pub delta: Vec<(Vector, Vector)>,
 }
 
+/// Which bodies sleep, and for how long each awake one has been still: the `sleep` system's
+/// state, kept from step to step (like the warm-start cache, not part of snapshots).
+#[derive(Clone, Debug, Default)]
+pub struct SleepState {
+    /// Seconds body i has been still.
+    pub still: Vec<Scalar>,
+    /// Body i sleeps: the snapshot treats it as fixed (zero inverse mass and inertia).
+    pub asleep: Vec<bool>,
+    /// Scratch: each free body's speed this step [m/s].
+    pub speed: Vec<Scalar>,
+    /// Scratch: body i may fall asleep this step.
+    pub ready: Vec<bool>,
+}
+
+impl SleepState {
+    /// Sizes the state for `n` bodies (new ones awake).
+    pub fn resize(&mut self, n: usize) {
+        self.still.resize(n, 0.0);
+        self.asleep.resize(n, false);
+    }
+
+    /// Makes the sleeping bodies fixed in the snapshot for this step, so gravity, the contact
+    /// stages and `integrate` leave them alone and pairs of two of them are never tested.
+    fn apply(&self, bodies: &mut Bodies) {
+        for (i, _) in self.asleep.iter().enumerate().filter(|(_, a)| **a) {
+            bodies.inv_mass[i] = 0.0;
+            bodies.inv_inertia_body[i] = crate::math::Mat3::ZERO;
+            bodies.inv_inertia_world[i] = crate::math::Mat3::ZERO;
+        }
+    }
+}
+
 /// Reused allocations of the shipped systems.
 #[derive(Clone, Debug, Default)]
 pub struct Scratch {
@@ -304,6 +340,8 @@ pub struct StepContext {
     pub scratch: Scratch,
     /// Number of the step being computed (1 for the first).
     pub step: u64,
+    /// Sleeping bodies (empty while `params.sleep` is off).
+    pub sleep: SleepState,
 }
 
 impl StepContext {
@@ -319,6 +357,7 @@ impl StepContext {
     pub fn reload(&mut self, world: &World) {
         let before = self.bodies.len();
         self.bodies.load(world);
+        self.sleep.apply(&mut self.bodies);
         if self.posed.entries.len() != self.bodies.len() || before != self.bodies.len() {
             self.posed.reset(&self.meshes, &self.bodies);
         }

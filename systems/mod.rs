@@ -13,7 +13,9 @@
 //! 8. `solve` — resting contact and friction: manifolds, clamped accumulated impulses,
 //!    warm starting (the paper's future work; idle without gravity and friction).
 //! 9. `correct` — positional correction of penetration (§2.6, E14).
-//! 10. `integrate` — poses from velocities; angular momentum kept (§2.7, E15, E16).
+//! 10. `sleep` — bodies still for half a second sleep until touched in motion (off unless
+//!     `Params::sleep`). Before `integrate`, which the paper's stages end with (CONTRACTS.md).
+//! 11. `integrate` — poses from velocities; angular momentum kept (§2.7, E15, E16).
 
 mod correct;
 mod cull;
@@ -23,6 +25,7 @@ mod gravity;
 mod integrate;
 mod prune;
 mod resolve;
+mod sleep;
 mod solve;
 mod vertex;
 
@@ -34,6 +37,7 @@ pub use gravity::gravity;
 pub use integrate::{integrate, rotate_free};
 pub use prune::{prune, separated};
 pub use resolve::{BodyState, approach_speed, collision_impulse, resolve};
+pub use sleep::sleep;
 pub use solve::solve;
 pub use vertex::{vertex, vertex_contact};
 
@@ -53,12 +57,13 @@ pub const REGISTRY: &[System] = &[
     System { name: "resolve", run: resolve },
     System { name: "solve", run: solve },
     System { name: "correct", run: correct },
+    System { name: "sleep", run: sleep },
     System { name: "integrate", run: integrate },
 ];
 
 /// The default order (see the module docs).
 pub const DEFAULT_ORDER: &[&str] =
-    &["cull", "prune", "face", "vertex", "edge", "gravity", "resolve", "solve", "correct", "integrate"];
+    &["cull", "prune", "face", "vertex", "edge", "gravity", "resolve", "solve", "correct", "sleep", "integrate"];
 
 /// The shipped system called `name`.
 pub fn find(name: &str) -> Result<System, ScheduleError> {
@@ -75,7 +80,7 @@ pub fn schedule_of<S: AsRef<str>>(names: &[S]) -> Result<Schedule, ScheduleError
 }
 
 /// The default schedule: `cull, prune, face, vertex, edge, gravity, resolve, solve, correct,
-/// integrate`.
+/// sleep, integrate`.
 #[must_use]
 pub fn default_schedule() -> Schedule {
     schedule_of(DEFAULT_ORDER).expect("the registry holds every default name once")

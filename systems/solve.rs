@@ -44,6 +44,7 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
     s.pairs.extend(ctx.pairs.iter().filter(|p| (p.contact().is_some() || p.is_candidate()) && resting(p)).copied());
     if s.pairs.is_empty() {
         s.cache.clear();
+        s.rows.clear();
         return;
     }
     ctx.pose_pairs(|p| p.contact().is_some() || p.is_candidate());

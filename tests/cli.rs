@@ -26,7 +26,7 @@ fn write(dir: &tempfile::TempDir, name: &str, contents: &str) -> String {
 fn systems_prints_the_default_order() {
     let o = rigid(&["systems"]);
     assert!(o.status.success());
-    assert_eq!(text(&o).0, "cull\nprune\nface\nvertex\nedge\ngravity\nresolve\nsolve\ncorrect\nintegrate\n");
+    assert_eq!(text(&o).0, "cull\nprune\nface\nvertex\nedge\ngravity\nresolve\nsolve\ncorrect\nsleep\nintegrate\n");
 }
 
 #[test]
@@ -214,4 +214,8 @@ fn bench_json_has_the_fields_of_benchmarks_md_and_the_scene_check_value() {
         (Some("pyramid"), Some(3), Some(6), Some(false))
     );
     assert!(r["max_displacement_m"].as_f64().is_some());
+    let o = rigid(&["bench", "pyramid", "--base", "3", "--steps", "60", "--sleep", "--json"]);
+    let r: serde_json::Value = serde_json::from_str(text(&o).0.trim()).expect("JSON");
+    assert_eq!(r["sleep"].as_bool(), Some(true), "--sleep is reported");
+    assert_eq!(r["ke_end"].as_f64(), Some(0.0), "a settled pyramid of six sleeps within a second");
 }

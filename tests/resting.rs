@@ -77,3 +77,56 @@ fn without_gravity_and_friction_the_contact_solver_is_idle() {
     assert!(sim.ctx.scratch.solve.rows.is_empty());
     assert_eq!(sim.contacts, [1, 0, 0]);
 }
+
+/// The pyramid of BENCHMARKS.md with `base` rows, sleeping on.
+fn sleeping_pyramid(base: u32) -> rigid_sandbox::sim::Sim {
+    let mut sim = rigid_sandbox::bench::scene_sim(rigid_sandbox::bench::BenchScene::Pyramid, base, 1);
+    sim.ctx.params.sleep = true;
+    sim
+}
+
+#[test]
+fn with_sleeping_on_a_settled_pyramid_falls_asleep_and_stays_exactly_put() {
+    let mut sim = sleeping_pyramid(10);
+    sim.run(120).expect("finite");
+    let cubes = 1..sim.len();
+    assert!(cubes.clone().all(|i| sim.ctx.sleep.asleep[i]), "all 55 cubes asleep after 2 s");
+    assert!(!sim.ctx.sleep.asleep[0], "the fixed ground is not a sleeper");
+    assert_eq!(sim.totals().kinetic_energy, 0.0);
+    let before = sim.actors();
+    sim.run(60).expect("finite");
+    assert_eq!(sim.actors(), before, "asleep, nothing moves, not even by round-off");
+    assert_eq!(sim.ctx.scratch.solve.rows.len(), 0, "no pair of sleeping cubes is solved");
+}
+
+#[test]
+fn a_box_dropped_on_a_sleeping_box_wakes_it_and_both_sleep_again() {
+    let floor = "Actor(name: \"floor\", shape: Box(size: (20.0, 1.0, 20.0)), position: (0.0, -0.5, 0.0), fixed: true, friction: 0.5, restitution: 0.0)";
+    let cube = |name: &str, y: f64| {
+        format!(
+            "Actor(name: \"{name}\", shape: Box(size: (1.0, 1.0, 1.0)), mass: 1.0, position: (0.0, {y}, 0.0), friction: 0.5, restitution: 0.0)"
+        )
+    };
+    let text = format!(
+        "Scene(solver: Solver(sleep: true), actors: [{floor}, {}, {}])",
+        cube("lower", 0.5),
+        cube("upper", 12.0)
+    );
+    let mut sim = sim_from_text(&text);
+    let lower = 1;
+    sim.run(40).expect("finite");
+    assert!(sim.ctx.sleep.asleep[lower], "the resting box sleeps within 40 steps");
+    let mut woken_at = None;
+    for _ in 0..200 {
+        sim.step().expect("finite");
+        if woken_at.is_none() && !sim.ctx.sleep.asleep[lower] {
+            woken_at = Some(sim.steps);
+        }
+    }
+    let woken_at = woken_at.expect("the falling box wakes the sleeping one");
+    // It falls 11 m: about 1.5 s, step 90 or so from the start.
+    assert!((80..110).contains(&woken_at), "woken at step {woken_at}");
+    assert!(sim.ctx.sleep.asleep[lower] && sim.ctx.sleep.asleep[2], "both asleep again");
+    let top = actor(&sim, "upper").pose.position;
+    assert!((top - rigid_sandbox::math::Vector::new(0.0, 1.5, 0.0)).length() < 2e-3, "stacked: {top}");
+}

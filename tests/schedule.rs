@@ -27,7 +27,7 @@ fn default_order_is_the_papers() {
     let names = systems::default_schedule().names();
     assert_eq!(
         names,
-        ["cull", "prune", "face", "vertex", "edge", "gravity", "resolve", "solve", "correct", "integrate"]
+        ["cull", "prune", "face", "vertex", "edge", "gravity", "resolve", "solve", "correct", "sleep", "integrate"]
     );
 }
 
@@ -50,6 +50,7 @@ fn insert_replace_remove_by_name() {
             "resolve",
             "solve",
             "correct",
+            "sleep",
             "integrate",
             "freeze"
         ]
