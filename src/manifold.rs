@@ -123,10 +123,11 @@ pub struct Axis {
 /// step to step instead of flickering between parallel faces.
 const PREFER: Scalar = 0.1;
 
-/// The least-overlap axis of A and B (see `Axis`), or `None` when they are more than `margin`
-/// apart along some axis.
+/// The least-overlap axis of A and B (see `Axis`), or `None` when they are more than `reach`
+/// apart along some axis. `margin` (the contact margin, without the speculative distance a
+/// fast pair's `reach` adds) sets how much better another axis must be to replace B's face.
 #[must_use]
-pub fn contact_axis(a: &Posed, b: &Posed, margin: Scalar) -> Option<Axis> {
+pub fn contact_axis(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
     let lowest = |p: &Posed, dir: Vector| p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
     let mut best: Option<Axis> = None;
     let mut consider = |normal: Vector, separation: Scalar, edge: bool, prefer: Scalar| {
@@ -151,7 +152,7 @@ pub fn contact_axis(a: &Posed, b: &Posed, margin: Scalar) -> Option<Axis> {
             consider(n, lowest(a, n) + lowest(b, -n), true, PREFER * margin);
         }
     }
-    best.filter(|x| x.separation <= margin)
+    best.filter(|x| x.separation <= reach)
 }
 
 /// Where A and B meet along `axis` when no vertex of either lies on the other (edge across
@@ -237,15 +238,15 @@ mod tests {
         let at = |y: f64| {
             Posed::new(Arc::new(ConvexMesh::cuboid(Vector::ONE)), &Pose::from_position(Vector::new(0.0, y, 0.0)))
         };
-        let axis = contact_axis(&at(0.5001), &floor, 0.02).expect("0.1 mm apart");
+        let axis = contact_axis(&at(0.5001), &floor, (0.02, 0.02)).expect("0.1 mm apart");
         assert_eq!((axis.normal, axis.edge), (Vector::Y, false));
         assert!((axis.separation - 1e-4).abs() < 1e-12);
-        assert!(contact_axis(&at(0.6), &floor, 0.02).is_none(), "10 cm is not near");
-        let sunk = contact_axis(&at(0.4), &floor, 0.02).expect("overlapping");
+        assert!(contact_axis(&at(0.6), &floor, (0.02, 0.02)).is_none(), "10 cm is not near");
+        let sunk = contact_axis(&at(0.4), &floor, (0.02, 0.02)).expect("overlapping");
         assert_eq!(sunk.normal, Vector::Y);
         assert!((sunk.separation + 0.1).abs() < 1e-12, "10 cm deep: {}", sunk.separation);
         // Seen from the floor's side, the normal flips.
-        assert_eq!(contact_axis(&floor, &at(0.5001), 0.02).expect("near").normal, -Vector::Y);
+        assert_eq!(contact_axis(&floor, &at(0.5001), (0.02, 0.02)).expect("near").normal, -Vector::Y);
     }
 
     #[test]
@@ -265,8 +266,10 @@ mod tests {
                 orientation: from_euler_degrees(Vector::new(45.0, 0.0, 0.0)),
             },
         );
-        let axis = contact_axis(&upper, &lower, 0.02).expect("touching");
+        let axis = contact_axis(&upper, &lower, (0.02, 0.02)).expect("touching");
         assert!(axis.edge, "{axis:?}");
+        // A fast pair's wider reach (speculative distance) does not change which axis wins.
+        assert_eq!(contact_axis(&upper, &lower, (0.02, 0.5)), Some(axis));
         assert!((axis.normal - Vector::Y).length() < 1e-12, "{axis:?}");
         assert!((axis.separation + 0.01).abs() < 1e-12, "{axis:?}");
         let p = support_point(&upper, &lower, &axis);

@@ -61,7 +61,7 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
         // apart (speculatively); the tests' own normal and depth decide only that it touches.
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let reach = margin * thin + params.speculative_distance(dt, b, ia) + params.speculative_distance(dt, b, ib);
-        let Some(axis) = contact_axis(pa, pb, reach) else {
+        let Some(axis) = contact_axis(pa, pb, (margin * thin, reach)) else {
             m.len = 0;
             pair.state = PairState::Candidate; // apart: no rows
             return;
