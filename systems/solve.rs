@@ -159,13 +159,6 @@ fn along(axis: &RowAxis, (la, aa): (Vector, Vector), (lb, ab): (Vector, Vector))
     (la - lb).dot(axis.dir) + aa.dot(axis.arm[0]) - ab.dot(axis.arm[1])
 }
 
-/// Relative speed of A against B along `axis` at the row's point.
-#[inline(always)]
-fn speed(b: &Bodies, row: &SolverRow, axis: &RowAxis) -> Scalar {
-    let (ia, ib) = (row.a as usize, row.b as usize);
-    along(axis, (b.velocity[ia], b.angular_velocity[ia]), (b.velocity[ib], b.angular_velocity[ib]))
-}
-
 /// Applies an impulse of `j` along `axis` at the row's point: +j on A, −j on B.
 #[inline(always)]
 fn push(b: &mut Bodies, row: &SolverRow, axis: &RowAxis, j: Scalar) {
@@ -295,18 +288,58 @@ fn iterate(
     }
 }
 
+/// The velocities of a row's two bodies, held in registers while the row is solved: its
+/// three impulses then update them without a round trip through memory each.
+#[derive(Clone, Copy)]
+struct Motion {
+    a: (Vector, Vector),
+    b: (Vector, Vector),
+}
+
+impl Motion {
+    #[inline(always)]
+    fn load(b: &Bodies, row: &SolverRow) -> Self {
+        let (ia, ib) = (row.a as usize, row.b as usize);
+        Self { a: (b.velocity[ia], b.angular_velocity[ia]), b: (b.velocity[ib], b.angular_velocity[ib]) }
+    }
+
+    #[inline(always)]
+    fn store(self, b: &mut Bodies, row: &SolverRow) {
+        let (ia, ib) = (row.a as usize, row.b as usize);
+        (b.velocity[ia], b.angular_velocity[ia]) = self.a;
+        (b.velocity[ib], b.angular_velocity[ib]) = self.b;
+    }
+
+    /// Relative speed of A against B along `axis`.
+    #[inline(always)]
+    fn speed(&self, axis: &RowAxis) -> Scalar {
+        along(axis, self.a, self.b)
+    }
+
+    /// An impulse of `j` along `axis`: +j on A, −j on B (as `push`).
+    #[inline(always)]
+    fn push(&mut self, row: &SolverRow, axis: &RowAxis, j: Scalar) {
+        self.a.0 += axis.dir * (j * row.inv_mass[0]);
+        self.a.1 += axis.spin[0] * j;
+        self.b.0 -= axis.dir * (j * row.inv_mass[1]);
+        self.b.1 -= axis.spin[1] * j;
+    }
+}
+
 /// One point: its normal impulse, then its friction.
 #[inline(always)]
 fn solve_point(b: &mut Bodies, row: &mut SolverRow, delta: &[(Vector, Vector)], h: Scalar, soft: Option<Softness>) {
-    normal_point(b, row, delta, h, soft);
+    let mut m = Motion::load(b, row);
+    normal_point(&mut m, row, delta, h, soft);
     if row.mu > 0.0 {
-        friction_point(b, row);
+        friction_point(&mut m, row);
     }
+    m.store(b, row);
 }
 
 /// The normal impulse at one point (see `iterate`).
 #[inline(always)]
-fn normal_point(b: &mut Bodies, row: &mut SolverRow, delta: &[(Vector, Vector)], h: Scalar, soft: Option<Softness>) {
+fn normal_point(m: &mut Motion, row: &mut SolverRow, delta: &[(Vector, Vector)], h: Scalar, soft: Option<Softness>) {
     let n = row.axes[0];
     let gap = row.gap + along(&n, delta[row.a as usize], delta[row.b as usize]);
     let (bias, mass_scale, impulse_scale) = match soft {
@@ -316,25 +349,27 @@ fn normal_point(b: &mut Bodies, row: &mut SolverRow, delta: &[(Vector, Vector)],
         }
         _ => (0.0, 1.0, 0.0),
     };
-    let dj = -n.mass * mass_scale * (speed(b, row, &n) + bias) - impulse_scale * row.impulse[0];
+    let dj = -n.mass * mass_scale * (m.speed(&n) + bias) - impulse_scale * row.impulse[0];
     let jn = (row.impulse[0] + dj).max(0.0);
-    push(b, row, &n, jn - row.impulse[0]);
+    m.push(row, &n, jn - row.impulse[0]);
     row.impulse[0] = jn;
 }
 
 /// The friction impulse at one point, within the Coulomb cone of its normal impulse.
 #[inline(always)]
-fn friction_point(b: &mut Bodies, row: &mut SolverRow) {
+fn friction_point(m: &mut Motion, row: &mut SolverRow) {
     let [_, t1, t2] = row.axes;
-    let (mut j1, mut j2) =
-        (row.impulse[1] - speed(b, row, &t1) * t1.mass, row.impulse[2] - speed(b, row, &t2) * t2.mass);
+    let (mut j1, mut j2) = (row.impulse[1] - m.speed(&t1) * t1.mass, row.impulse[2] - m.speed(&t2) * t2.mass);
     let limit = row.mu * row.impulse[0];
-    let len = (j1 * j1 + j2 * j2).sqrt();
-    if len > limit {
+    let len2 = j1 * j1 + j2 * j2;
+    // Compared squared: the square root (a long-latency instruction on the solver's critical
+    // path) is only taken when the impulse leaves the cone.
+    if len2 > limit * limit {
+        let len = len2.sqrt();
         (j1, j2) = (j1 * limit / len, j2 * limit / len);
     }
-    push(b, row, &t1, j1 - row.impulse[1]);
-    push(b, row, &t2, j2 - row.impulse[2]);
+    m.push(row, &t1, j1 - row.impulse[1]);
+    m.push(row, &t2, j2 - row.impulse[2]);
     (row.impulse[1], row.impulse[2]) = (j1, j2);
 }
 
