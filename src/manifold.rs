@@ -31,56 +31,98 @@ impl Manifold {
 /// Below this distance [fraction of the smaller radius] two candidate points are one.
 const SAME_POINT: Scalar = 1e-6;
 
-/// The vertices of each body inside the other or within `margin` [m] of it (the features the
-/// vertex test sees, both ways; points just outside are speculative, so a box that tilts by a
-/// hair keeps its corners supported instead of dropping to two points and tipping over),
-/// reduced to at most four that span the patch: the deepest, the farthest from it, the one
-/// making the largest triangle, and the one adding most area. A point's gap is its signed
-/// distance to the other body's face that faces it (the face whose normal is closest to the
-/// contact normal `n`, from B to A, for A's vertices; to −n for B's): the distance to the
-/// *nearest* face would be a side face's for a corner on an edge, near zero however deep the
-/// corner is. Empty when no vertex qualifies (an edge crossing an edge): the caller falls back
-/// to the detected contact. `scratch` is reused.
+/// Reused buffers of `manifold`: the incident face as it is clipped, and the points kept.
+#[derive(Clone, Debug, Default)]
+pub struct ClipScratch {
+    polygon: Vec<Vector>,
+    clipped: Vec<Vector>,
+    points: Vec<(Vector, Scalar)>,
+}
+
+/// The contact points of a pair held along `axis` (from `contact_axis`), by clipping, as
+/// Box2D, Bullet and rapier do: the *reference* face is the face whose normal the axis is; the
+/// *incident* face is the other body's face most opposed to it. The incident face's outline is
+/// clipped to the prism over the reference face (its side planes), and each clipped corner
+/// within `reach` [m] of the reference plane is a point, placed halfway between the corner and
+/// the plane, with its signed distance to the plane as its gap (≤ 0 penetrating, > 0 a
+/// speculative point that may close within the step). Reduced to at most four spanning the
+/// patch: the deepest, the farthest from it, the one making the largest triangle, and the one
+/// adding most area.
+///
+/// Corners the step may bring into contact are points even while apart, so a tumbling cube
+/// landing on another is stopped over its whole face, not pivoted about the one corner that
+/// touched first. Empty for an edge–edge axis or when nothing survives the clipping: the
+/// caller then holds the pair at one point (`support_point`). `scratch` is reused.
 #[must_use]
-pub fn manifold(
-    a: &Posed,
-    b: &Posed,
-    n: Vector,
-    (margin, reach): (Scalar, Scalar),
-    scratch: &mut Vec<(Vector, Scalar)>,
-) -> Manifold {
-    let facing = |p: &Posed, dir: Vector| {
-        p.planes
-            .iter()
-            .copied()
-            .max_by(|x, y| x.normal.dot(dir).total_cmp(&y.normal.dot(dir)))
-            .map_or((n, 0.0), |pl| (pl.normal, pl.offset))
+pub fn manifold(a: &Posed, b: &Posed, axis: &Axis, reach: Scalar, scratch: &mut ClipScratch) -> Manifold {
+    let (reference, incident, face, n) = match axis.reference {
+        Reference::FaceOfB(f) => (b, a, f as usize, axis.normal),
+        Reference::FaceOfA(f) => (a, b, f as usize, -axis.normal),
+        Reference::Edges => return Manifold::default(),
     };
-    let (face_b, face_a) = (facing(b, n), facing(a, -n));
-    scratch.clear();
-    // A vertex counts when it is within `reach` of the other body and the face it is nearest
-    // to is (within `margin`) the facing face: a corner that went in through a side face
-    // belongs to another contact, and its distance to the facing face (up to a whole body
-    // deep) would push the pair apart far too hard.
-    let candidates =
-        |p: &Posed, (normal, offset): (Vector, Scalar), vertices: &[Vector], out: &mut Vec<(Vector, Scalar)>| {
-            for &v in vertices {
-                let nearest = p.max_plane_distance(v);
-                let gap = normal.dot(v) - offset;
-                if nearest <= reach && gap >= nearest - margin {
-                    out.push((v, gap));
-                }
-            }
-        };
-    candidates(b, face_b, &a.vertices, scratch);
-    candidates(a, face_a, &b.vertices, scratch);
+    let plane = reference.planes[face];
+    let Some(incident_face) = (0..incident.planes.len())
+        .min_by(|&x, &y| incident.planes[x].normal.dot(n).total_cmp(&incident.planes[y].normal.dot(n)))
+    else {
+        return Manifold::default();
+    };
+    let ClipScratch { polygon, clipped, points } = scratch;
+    polygon.clear();
+    polygon.extend(outline(incident, incident_face).iter().map(|&i| incident.vertices[i as usize]));
+    let side = outline(reference, face);
+    for k in 0..side.len() {
+        let (p, q) = (reference.vertices[side[k] as usize], reference.vertices[side[(k + 1) % side.len()] as usize]);
+        // Outward for a counter-clockwise outline seen from outside (along n).
+        let out = (q - p).cross(n);
+        clip_polygon(polygon, clipped, out, out.dot(p));
+        std::mem::swap(polygon, clipped);
+        if polygon.is_empty() {
+            return Manifold::default();
+        }
+    }
+    points.clear();
+    for &x in polygon.iter() {
+        let gap = n.dot(x) - plane.offset;
+        if gap <= reach {
+            points.push((x - n * (0.5 * gap), gap));
+        }
+    }
+    reduce(points, SAME_POINT * a.mesh.radius.min(b.mesh.radius))
+}
+
+/// Face `f`'s outline on the body (vertex indices, counter-clockwise seen from outside).
+fn outline(p: &Posed, f: usize) -> &[u32] {
+    let m = &p.mesh;
+    &m.face_vertices[m.face_start[f] as usize..m.face_start[f + 1] as usize]
+}
+
+/// One Sutherland–Hodgman pass: the part of convex polygon `input` where `out·x ≤ offset`,
+/// into `output`.
+fn clip_polygon(input: &[Vector], output: &mut Vec<Vector>, out: Vector, offset: Scalar) {
+    output.clear();
+    let Some(&last) = input.last() else { return };
+    let (mut prev, mut d_prev) = (last, out.dot(last) - offset);
+    for &x in input {
+        let d = out.dot(x) - offset;
+        if (d <= 0.0) != (d_prev <= 0.0) {
+            output.push(prev + (x - prev) * (d_prev / (d_prev - d)));
+        }
+        if d <= 0.0 {
+            output.push(x);
+        }
+        (prev, d_prev) = (x, d);
+    }
+}
+
+/// At most four of `points` (point, gap) spanning the patch: the deepest, then the farthest
+/// from it, the one making the largest triangle with the two, and the one adding most area.
+/// Points closer than `same` to the ones kept add nothing.
+fn reduce(points: &[(Vector, Scalar)], same: Scalar) -> Manifold {
     let mut m = Manifold::default();
-    let Some(&(p0, g0)) = scratch.iter().min_by(|x, y| x.1.total_cmp(&y.1)) else { return m };
-    m.len = 1;
-    let same = SAME_POINT * a.mesh.radius.min(b.mesh.radius);
-    (m.points[0], m.gaps[0]) = (p0, g0);
+    let Some(&(p0, g0)) = points.iter().min_by(|x, y| x.1.total_cmp(&y.1)) else { return m };
+    (m.points[0], m.gaps[0], m.len) = (p0, g0, 1);
     let best = |score: &dyn Fn(Vector) -> Scalar| {
-        scratch.iter().map(|&(p, gap)| (p, gap, score(p))).max_by(|x, y| x.2.total_cmp(&y.2)).filter(|x| x.2 > same)
+        points.iter().map(|&(p, gap)| (p, gap, score(p))).max_by(|x, y| x.2.total_cmp(&y.2)).filter(|x| x.2 > same)
     };
     let push = |m: &mut Manifold, (p, gap, _): (Vector, Scalar, Scalar)| {
         (m.points[m.len], m.gaps[m.len]) = (p, gap);
@@ -114,8 +156,27 @@ pub struct Axis {
     pub normal: Vector,
     /// Signed distance along it [m]: > 0 apart, < 0 overlapping by that much.
     pub separation: Scalar,
-    /// Whether the axis is an edge–edge cross product (else a face normal).
-    pub edge: bool,
+    /// What the axis is: a face normal of either body, or an edge–edge cross product.
+    pub reference: Reference,
+}
+
+impl Axis {
+    /// True for an edge–edge cross product.
+    #[must_use]
+    pub fn is_edge(&self) -> bool {
+        self.reference == Reference::Edges
+    }
+}
+
+/// The feature an `Axis` comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reference {
+    /// The outward normal of B's face (plane index): the axis itself.
+    FaceOfB(u32),
+    /// The outward normal of A's face: minus the axis.
+    FaceOfA(u32),
+    /// The cross product of an edge direction of each body.
+    Edges,
 }
 
 /// A face of A is preferred to one of B, and an edge axis to a face, only when it separates
@@ -130,16 +191,16 @@ const PREFER: Scalar = 0.1;
 pub fn contact_axis(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
     let lowest = |p: &Posed, dir: Vector| p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
     let mut best: Option<Axis> = None;
-    let mut consider = |normal: Vector, separation: Scalar, edge: bool, prefer: Scalar| {
+    let mut consider = |normal: Vector, separation: Scalar, reference: Reference, prefer: Scalar| {
         if best.is_none_or(|x| separation > x.separation + prefer) {
-            best = Some(Axis { normal, separation, edge });
+            best = Some(Axis { normal, separation, reference });
         }
     };
-    for pl in &b.planes {
-        consider(pl.normal, lowest(a, pl.normal) - pl.offset, false, 0.0);
+    for (f, pl) in b.planes.iter().enumerate() {
+        consider(pl.normal, lowest(a, pl.normal) - pl.offset, Reference::FaceOfB(f as u32), 0.0);
     }
-    for pl in &a.planes {
-        consider(-pl.normal, lowest(b, pl.normal) - pl.offset, false, PREFER * margin);
+    for (f, pl) in a.planes.iter().enumerate() {
+        consider(-pl.normal, lowest(b, pl.normal) - pl.offset, Reference::FaceOfA(f as u32), PREFER * margin);
     }
     let centre = a.position - b.position;
     for &da in &a.edge_directions {
@@ -149,7 +210,7 @@ pub fn contact_axis(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> 
                 continue; // parallel edges: their plane's normal is a face axis already
             }
             let n = if cross.dot(centre) < 0.0 { -cross.normalize() } else { cross.normalize() };
-            consider(n, lowest(a, n) + lowest(b, -n), true, PREFER * margin);
+            consider(n, lowest(a, n) + lowest(b, -n), Reference::Edges, PREFER * margin);
         }
     }
     best.filter(|x| x.separation <= reach)
@@ -219,13 +280,15 @@ mod tests {
         );
         let cube =
             Posed::new(Arc::new(ConvexMesh::cuboid(Vector::ONE)), &Pose::from_position(Vector::new(0.0, 0.499, 0.0)));
-        let m = manifold(&cube, &floor, Vector::Y, (0.02, 0.02), &mut Vec::new());
+        let axis = contact_axis(&cube, &floor, (0.02, 0.02)).expect("touching");
+        let m = manifold(&cube, &floor, &axis, 0.02, &mut ClipScratch::default());
         assert_eq!(m.len, 4);
         let mut corners: Vec<(i64, i64)> =
             m.points().iter().map(|p| ((p.x * 2.0) as i64, (p.z * 2.0) as i64)).collect();
         corners.sort_unstable();
         assert_eq!(corners, [(-1, -1), (-1, 1), (1, -1), (1, 1)]);
-        assert!(m.points().iter().all(|p| (p.y + 0.001).abs() < 1e-12));
+        // Halfway between the corner 1 mm deep and the floor's top.
+        assert!(m.points().iter().all(|p| (p.y + 0.0005).abs() < 1e-12));
         assert!(m.gaps[..4].iter().all(|g| (g + 0.001).abs() < 1e-12), "each corner 1 mm deep");
     }
 
@@ -239,7 +302,7 @@ mod tests {
             Posed::new(Arc::new(ConvexMesh::cuboid(Vector::ONE)), &Pose::from_position(Vector::new(0.0, y, 0.0)))
         };
         let axis = contact_axis(&at(0.5001), &floor, (0.02, 0.02)).expect("0.1 mm apart");
-        assert_eq!((axis.normal, axis.edge), (Vector::Y, false));
+        assert_eq!((axis.normal, axis.is_edge()), (Vector::Y, false));
         assert!((axis.separation - 1e-4).abs() < 1e-12);
         assert!(contact_axis(&at(0.6), &floor, (0.02, 0.02)).is_none(), "10 cm is not near");
         let sunk = contact_axis(&at(0.4), &floor, (0.02, 0.02)).expect("overlapping");
@@ -267,13 +330,17 @@ mod tests {
             },
         );
         let axis = contact_axis(&upper, &lower, (0.02, 0.02)).expect("touching");
-        assert!(axis.edge, "{axis:?}");
+        assert!(axis.is_edge(), "{axis:?}");
         // A fast pair's wider reach (speculative distance) does not change which axis wins.
         assert_eq!(contact_axis(&upper, &lower, (0.02, 0.5)), Some(axis));
         assert!((axis.normal - Vector::Y).length() < 1e-12, "{axis:?}");
         assert!((axis.separation + 0.01).abs() < 1e-12, "{axis:?}");
         let p = support_point(&upper, &lower, &axis);
         assert!((p - Vector::new(0.0, h - 0.005, 0.0)).length() < 1e-12, "halfway between the edges: {p}");
-        assert_eq!(manifold(&upper, &lower, axis.normal, (0.02, 0.02), &mut Vec::new()).len, 0, "no vertex inside");
+        assert_eq!(
+            manifold(&upper, &lower, &axis, 0.02, &mut ClipScratch::default()).len,
+            0,
+            "edges meet at one point"
+        );
     }
 }

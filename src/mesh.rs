@@ -43,6 +43,12 @@ pub struct ConvexMesh {
     pub edges: Vec<[u32; 2]>,
     /// Distinct face planes, in order of first triangle.
     pub planes: Vec<Plane>,
+    /// The outline of face f (plane f): its vertices counter-clockwise seen from outside,
+    /// `face_vertices[face_start[f]..face_start[f + 1]]`. Contact manifolds clip one body's
+    /// face against another's outline.
+    pub face_vertices: Vec<u32>,
+    /// Where each face's outline starts in `face_vertices`, plus one entry for the end.
+    pub face_start: Vec<u32>,
     /// Directions of the feature edges (between non-coplanar faces), each once up to sign:
     /// the edge axes of a separating-axis test (a box has 3).
     pub edge_directions: Vec<Vector>,
@@ -84,8 +90,9 @@ impl ConvexMesh {
             props = VolumeProps { volume: -props.volume, inertia: -props.inertia, ..props };
         }
         let vertices: Vec<Vector> = vertices.iter().map(|&v| v - props.centroid).collect();
-        let planes = face_planes(&vertices, &triangles, size);
+        let (planes, plane_of) = face_planes(&vertices, &triangles, size);
         check_convex(&vertices, &planes, size)?;
+        let (face_vertices, face_start) = face_outlines(&vertices, &triangles, &planes, &plane_of);
         let radius = vertices.iter().map(|v| v.length()).fold(0.0, Scalar::max);
         let thickness = planes
             .iter()
@@ -99,6 +106,8 @@ impl ConvexMesh {
             triangles,
             edges,
             planes,
+            face_vertices,
+            face_start,
             edge_directions,
             feature_edges,
             box_half_extents,
@@ -231,22 +240,60 @@ fn directed(t: &[u32; 3], a: u32, b: u32) -> bool {
     (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b)
 }
 
-fn face_planes(vertices: &[Vector], triangles: &[[u32; 3]], size: Scalar) -> Vec<Plane> {
+/// The distinct planes of the triangles, and which plane each triangle lies in (`None` for a
+/// zero-area triangle).
+fn face_planes(vertices: &[Vector], triangles: &[[u32; 3]], size: Scalar) -> (Vec<Plane>, Vec<Option<usize>>) {
     let mut planes: Vec<Plane> = Vec::new();
+    let mut plane_of = Vec::with_capacity(triangles.len());
     for t in triangles {
         let [a, b, c] = t.map(|i| vertices[i as usize]);
         // Zero-area triangles carry no direction (§3.3 step 5).
-        let Some(normal) = (b - a).cross(c - a).try_normalize() else { continue };
+        let Some(normal) = (b - a).cross(c - a).try_normalize() else {
+            plane_of.push(None);
+            continue;
+        };
         let plane = Plane { normal, offset: normal.dot(a) };
         let same = |p: &Plane| {
             (p.normal - normal).length() <= PLANE_MERGE_TOLERANCE
                 && (p.offset - plane.offset).abs() <= PLANE_MERGE_TOLERANCE * size
         };
-        if !planes.iter().any(same) {
+        if let Some(k) = planes.iter().position(same) {
+            plane_of.push(Some(k));
+        } else {
+            plane_of.push(Some(planes.len()));
             planes.push(plane);
         }
     }
-    planes
+    (planes, plane_of)
+}
+
+/// Each plane's outline: the vertices of its triangles, each once, ordered by angle about
+/// their centroid counter-clockwise seen from outside. The mesh is convex, so a face is a
+/// convex polygon and angle order is its boundary order.
+fn face_outlines(
+    vertices: &[Vector],
+    triangles: &[[u32; 3]],
+    planes: &[Plane],
+    plane_of: &[Option<usize>],
+) -> (Vec<u32>, Vec<u32>) {
+    let (mut flat, mut start) = (Vec::new(), vec![0_u32]);
+    for (f, plane) in planes.iter().enumerate() {
+        let mut ids: Vec<u32> =
+            triangles.iter().zip(plane_of).filter(|(_, p)| **p == Some(f)).flat_map(|(t, _)| *t).collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let centre = ids.iter().map(|&i| vertices[i as usize]).sum::<Vector>() / ids.len() as Scalar;
+        let u = plane.normal.any_orthonormal_vector();
+        let v = plane.normal.cross(u);
+        let angle = |i: &u32| {
+            let d = vertices[*i as usize] - centre;
+            d.dot(v).atan2(d.dot(u))
+        };
+        ids.sort_by(|x, y| angle(x).total_cmp(&angle(y)).then(x.cmp(y)));
+        flat.extend_from_slice(&ids);
+        start.push(flat.len() as u32);
+    }
+    (flat, start)
 }
 
 fn check_convex(vertices: &[Vector], planes: &[Plane], size: Scalar) -> Result<(), MeshError> {
@@ -331,6 +378,22 @@ mod tests {
         assert_eq!(c, Vector::ZERO);
         assert!((m.radius - 3f64.sqrt() / 2.0).abs() < 1e-15);
         assert!((m.thickness - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn each_face_outline_runs_counter_clockwise_seen_from_outside() {
+        let m = ConvexMesh::cuboid(Vector::new(1.0, 2.0, 3.0));
+        assert_eq!(m.face_start.len(), 7);
+        for (f, plane) in m.planes.iter().enumerate() {
+            let ids = &m.face_vertices[m.face_start[f] as usize..m.face_start[f + 1] as usize];
+            assert_eq!(ids.len(), 4, "a box face is a quadrilateral");
+            let p: Vec<Vector> = ids.iter().map(|&i| m.vertices[i as usize]).collect();
+            for k in 0..4 {
+                assert!((plane.normal.dot(p[k]) - plane.offset).abs() < 1e-15, "on its plane");
+                let turn = (p[(k + 1) % 4] - p[k]).cross(p[(k + 2) % 4] - p[(k + 1) % 4]);
+                assert!(turn.dot(plane.normal) > 0.0, "face {f} turns left about its normal");
+            }
+        }
     }
 
     #[test]

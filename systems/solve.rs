@@ -18,7 +18,7 @@
 
 use crate::bodies::Bodies;
 use crate::contact::{Contact, Feature, Pair, PairState};
-use crate::manifold::{Manifold, contact_axis, manifold, support_point};
+use crate::manifold::{ClipScratch, Manifold, contact_axis, manifold, support_point};
 use crate::math::{Scalar, Vector, exp_map};
 use crate::step::{CachedManifold, CachedPoint, RowAxis, SolverRow, StepContext};
 use hecs::World;
@@ -54,7 +54,7 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
     s.manifolds.resize(s.pairs.len(), Manifold::default());
     s.near.clear();
     s.near.extend(s.pairs.iter().map(Pair::is_candidate));
-    s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut()).for_each_init(Vec::new, |scratch, (pair, m)| {
+    s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut()).for_each_init(ClipScratch::default, |scratch, (pair, m)| {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
         let thin = b.thinner(meshes, pair.a as usize, pair.b as usize);
         // Held along the pair's least-overlap axis (see `contact_axis`), touching or a hair
@@ -69,11 +69,7 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
         let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
         let point = support_point(pa, pb, &axis);
         pair.state = PairState::Resolved(Contact { point, normal: axis.normal, depth: -axis.separation, feature });
-        *m = if axis.edge {
-            Manifold::default()
-        } else {
-            manifold(pa, pb, axis.normal, (margin * thin, reach), scratch)
-        };
+        *m = manifold(pa, pb, &axis, reach, scratch);
         if m.len == 0 {
             // Edge across edge, or no vertex on the other body: one point where they meet.
             (m.points[0], m.gaps[0], m.len) = (point, axis.separation, 1);
