@@ -61,6 +61,7 @@ pub mod schedule;
 pub mod shapes;
 pub mod sim;
 pub mod snapshot;
+pub mod solver;
 pub mod spawners;
 pub mod stacks;
 pub mod step;

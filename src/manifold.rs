@@ -31,6 +31,9 @@ impl Manifold {
 /// Below this distance [fraction of the smaller radius] two candidate points are one.
 const SAME_POINT: Scalar = 1e-6;
 
+/// An edge axis within about 8° of a face normal (this cosine) is clipped against that face.
+const EDGE_ON_FACE: Scalar = 0.99;
+
 /// Reused buffers of `manifold`: the incident face as it is clipped, and the points kept.
 #[derive(Clone, Debug, Default)]
 pub struct ClipScratch {
@@ -55,12 +58,26 @@ pub struct ClipScratch {
 /// caller then holds the pair at one point (`support_point`). `scratch` is reused.
 #[must_use]
 pub fn manifold(a: &Posed, b: &Posed, axis: &Axis, reach: Scalar, scratch: &mut ClipScratch) -> Manifold {
-    let (reference, incident, face, n) = match axis.reference {
-        Reference::FaceOfB(f) => (b, a, f as usize, axis.normal),
-        Reference::FaceOfA(f) => (a, b, f as usize, -axis.normal),
-        Reference::Edges => return Manifold::default(),
+    let (reference, incident, face) = match axis.reference {
+        Reference::FaceOfB(f) => (b, a, f as usize),
+        Reference::FaceOfA(f) => (a, b, f as usize),
+        Reference::Edges => {
+            // An edge axis nearly along a face normal is a face resting on an edge: a cube lying
+            // over the edge of a long wall, whose far corners make the wall's own face axis
+            // read deeper than the edge. Clipped against that face it gets a point at each end
+            // of the edge, where one point would let it seesaw.
+            let best = |p: &Posed, n: Vector| {
+                (0..p.planes.len()).map(|f| (p.planes[f].normal.dot(n), f)).max_by(|x, y| x.0.total_cmp(&y.0))
+            };
+            match (best(b, axis.normal), best(a, -axis.normal)) {
+                (Some((cb, fb)), Some((ca, _))) if cb >= ca && cb >= EDGE_ON_FACE => (b, a, fb),
+                (_, Some((ca, fa))) if ca >= EDGE_ON_FACE => (a, b, fa),
+                _ => return Manifold::default(),
+            }
+        }
     };
     let plane = reference.planes[face];
+    let n = plane.normal;
     let Some(incident_face) = (0..incident.planes.len())
         .min_by(|&x, &y| incident.planes[x].normal.dot(n).total_cmp(&incident.planes[y].normal.dot(n)))
     else {

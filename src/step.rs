@@ -180,74 +180,51 @@ pub struct CullScratch {
     pub chunks: Vec<Vec<(u32, u32)>>,
 }
 
-/// One direction of a solver row: everything an impulse along it needs, computed once a step
-/// so a sweep does no matrix products.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RowAxis {
-    /// Unit direction d.
-    pub dir: Vector,
-    /// r_a × d and r_b × d: the relative speed along d is (v_a − v_b)·d + ω_a·arm_a − ω_b·arm_b.
-    pub arm: [Vector; 2],
-    /// I_a⁻¹ (r_a × d) and I_b⁻¹ (r_b × d): the spin an impulse of 1 along d gives each body.
-    pub spin: [Vector; 2],
-    /// Effective mass along d, 1 / K [kg] (PHYSICS.md §2.5's K).
-    pub mass: Scalar,
-}
-
-/// One manifold point as the contact solver (`solve`) sees it.
+/// A pair `solve` holds this step.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SolverRow {
-    /// Body A (lower index).
-    pub a: u32,
-    /// Body B.
-    pub b: u32,
-    /// The test that found the pair's contact; `None` for a near pair held speculatively.
-    pub feature: Option<Feature>,
-    /// Inverse masses of A and B [1/kg].
-    pub inv_mass: [Scalar; 2],
-    /// The point in A's body frame, to match it next step.
-    pub local: Vector,
-    /// Normal (from B to A) and the two tangents.
-    pub axes: [RowAxis; 3],
-    /// Friction coefficient of the pair.
-    pub mu: Scalar,
-    /// Gap at the point when the step began [m]: > 0 apart (speculative), < 0 penetrating.
-    pub gap: Scalar,
-    /// Penetration left alone [m] (`Params::slop` times the thinner body's thickness).
-    pub slop: Scalar,
-    /// Fastest push out of a penetration [m/s] (`Params::max_correction` of the thinner body's
-    /// thickness per step).
-    pub max_push: Scalar,
-    /// Accumulated impulses along the axes [N·s]: normal (≥ 0), then the two friction ones.
-    pub impulse: [Scalar; 3],
+pub struct HeldPair {
+    /// Index into `SolveScratch::pairs`.
+    pub pair: u32,
+    /// Its batch and lane.
+    pub batch: u32,
+    /// Lane within the batch.
+    pub lane: u8,
+    /// Points (1 to 4).
+    pub len: u8,
 }
 
-/// A point's impulses kept for the next step's warm start.
+/// A pair's contact points fixed to the two bodies, so a pair that has hardly moved relative to
+/// each other since they were found keeps them (rapier's contact recycling): the manifold,
+/// and so the warm start, stays the same from step to step instead of being rebuilt from
+/// round-off, and the separating-axis test and clipping are skipped.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct CachedPoint {
-    /// The point in A's body frame [m].
-    pub local: Vector,
-    /// Normal impulse [N·s].
-    pub normal: Scalar,
-    /// Friction impulse, world frame [N·s].
-    pub tangent: Vector,
-}
-
-/// A pair's cached points (at most `manifold::MAX_POINTS`), without a heap allocation.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct CachedManifold {
-    /// The points; the first `len` are valid.
-    pub points: [CachedPoint; crate::manifold::MAX_POINTS],
-    /// How many.
+pub struct Geometry {
+    /// B's centre in A's body frame when the points were found [m].
+    pub offset: Vector,
+    /// B's orientation relative to A's then.
+    pub turn: crate::math::Quat,
+    /// The normal (from B to A) in A's body frame.
+    pub normal: Vector,
+    /// Each point on A's surface, A's body frame [m].
+    pub on_a: [Vector; crate::manifold::MAX_POINTS],
+    /// Each point on B's surface, B's body frame [m].
+    pub on_b: [Vector; crate::manifold::MAX_POINTS],
+    /// How many points.
     pub len: usize,
 }
 
-impl CachedManifold {
-    /// The valid points.
-    #[must_use]
-    pub fn points(&self) -> &[CachedPoint] {
-        &self.points[..self.len]
-    }
+/// A pair's cached state: its contact geometry and its impulses (points' and friction
+/// patch's), without a heap allocation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CachedManifold {
+    /// Where the points are.
+    pub geometry: Geometry,
+    /// Each point's normal impulse [N·s].
+    pub normal: [Scalar; crate::manifold::MAX_POINTS],
+    /// Friction impulse at the patch's centre, world frame [N·s].
+    pub tangent: Vector,
+    /// Twist impulse about the normal, world frame [N·m·s].
+    pub twist: Vector,
 }
 
 /// Reused buffers of the contact solver (`solve`), and its warm-start cache, the one piece of
@@ -263,19 +240,36 @@ pub struct SolveScratch {
     pub near: Vec<bool>,
     /// The order in which pairs are solved: (height of the contact against gravity, index).
     pub order: Vec<(Scalar, u32)>,
-    /// Each solved pair's rows, (first, count), in solving order.
-    pub spans: Vec<(u32, u32)>,
-    /// One row per manifold point.
-    pub rows: Vec<SolverRow>,
-    /// Last step's impulses by pair (looked up, never iterated, so hashing order is harmless).
-    pub cache: std::collections::HashMap<(u32, u32), CachedManifold>,
-    /// The step these rows belong to (`correct` uses them only if `solve` ran this step).
+    /// One entry per held pair, in solving order.
+    pub held: Vec<HeldPair>,
+    /// Solver-body slots of each held pair (scratch for `solver::place`).
+    pub slots: Vec<[u32; 2]>,
+    /// (batch, lane) of each held pair.
+    pub placed: Vec<(u32, u8)>,
+    /// Scratch of `solver::place`.
+    pub last: Vec<u32>,
+    /// Constraints per batch (scratch of `solver::place`).
+    pub fill: Vec<u8>,
+    /// The batches of independent constraints, in solving order.
+    pub batches: Vec<crate::solver::Batch>,
+    /// Their points, lane by lane.
+    pub points: Vec<[crate::solver::ContactPoint; crate::solver::LANES]>,
+    /// Each pair's contact geometry (in `pairs` order), found or recycled this step.
+    pub geometry: Vec<Geometry>,
+    /// Whether each pair's geometry was recycled from the previous step.
+    pub recycled: Vec<bool>,
+    /// Last step's impulses by pair, sorted by pair (looked up by binary search).
+    pub cache: Vec<((u32, u32), CachedManifold)>,
+    /// The step these constraints belong to (`correct` uses them only if `solve` ran this step).
     pub step: u64,
-    /// The free bodies of the rows, sorted, each once.
+    /// The free bodies of the constraints, sorted, each once: solver body k is `moving[k]`.
     pub moving: Vec<u32>,
-    /// Displacement and rotation vector of each body over the substeps done so far, by body
-    /// (zero for bodies not moving).
-    pub delta: Vec<(Vector, Vector)>,
+    /// Each actor's solver-body slot (`u32::MAX` when not moving this step).
+    pub slot: Vec<u32>,
+    /// The solver bodies, `moving.len()` of them and then the static slot.
+    pub bodies: Vec<crate::solver::SolverBody>,
+    /// S = (I⁻¹)^½ in world axes of each solver body (zero for the static slot).
+    pub scale: Vec<crate::math::Mat3>,
 }
 
 /// Which bodies sleep, and for how long each awake one has been still: the `sleep` system's

@@ -22,7 +22,7 @@ pub fn correction(depth: Scalar, thickness: Scalar, params: &Params) -> Scalar {
 /// - Paper: none (the paper leaves overlaps in place: E14); PHYSICS.md §2.6.
 /// - Cost: O(C) for C contacts.
 pub fn correct(world: &mut World, ctx: &mut StepContext) {
-    let held = ctx.scratch.solve.step == ctx.step && !ctx.scratch.solve.rows.is_empty();
+    let held = ctx.scratch.solve.step == ctx.step && !ctx.scratch.solve.held.is_empty();
     let mut moved = false;
     for k in 0..ctx.pairs.len() {
         let pair = ctx.pairs[k];

@@ -91,9 +91,10 @@ pub fn resolve(world: &mut World, ctx: &mut StepContext) {
             let b = &mut ctx.bodies;
             let (mut sa, mut sb) = (state(b, ia), state(b, ib));
             let e = 0.5 * (b.restitution[ia] + b.restitution[ib]);
-            // An inelastic impact where `solve` runs is left to it: it stops the approach over
-            // the whole manifold, where one impulse at one point would set the body turning.
-            let held = e == 0.0 && ctx.params.resting_contacts(ctx.dt, b.pair_friction(ia, ib));
+            // Where `solve` runs it takes the impacts too: it stops the approach over the whole
+            // manifold and bounces each point (`solver::restitution`), where one impulse at one
+            // point would set the body turning.
+            let held = ctx.params.resting_contacts(ctx.dt, b.pair_friction(ia, ib));
             if held || approach_speed(&sa, &sb, &contact) <= threshold {
                 continue;
             }

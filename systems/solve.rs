@@ -1,40 +1,54 @@
-//! `solve`: resting contact and friction, the paper's "future work". Sequential impulses over
-//! contact manifolds (up to four points a pair), with accumulated normal impulses clamped at
-//! zero and Coulomb friction clamped to the cone |j_t| ≤ μ j_n, warm-started from the previous
-//! step's impulses (Catto, "Iterative Dynamics with Temporal Coherence", 2005), solved as a
-//! "soft step" (Catto, "Solver2D", 2024; Box2D v3; rapier's TGS): the step is cut into
-//! substeps, penetration is pushed out by a stiff damped spring and a rigid relax pass takes
-//! the push-out velocity back, so penetration is removed without adding energy.
+//! `solve`: resting contact, friction and impacts under gravity, the paper's "future work".
+//! Sequential impulses over contact manifolds (up to four points a pair), with accumulated
+//! normal impulses clamped at zero and Coulomb friction held within μ times them, warm-started
+//! from the previous step's impulses (Catto, "Iterative Dynamics with Temporal Coherence",
+//! 2005), solved as a "soft step" (Catto, "Solver2D", 2024; Box2D v3; rapier's TGS): the step
+//! is cut into substeps, penetration is pushed out by a stiff damped spring and a rigid relax
+//! pass takes the push-out velocity back, so penetration is removed without adding energy.
+//! The kernel and its data are in `solver.rs`; this file finds the manifolds and builds the
+//! constraints.
 //!
 //! Each pair is held along its least-overlap axis (`manifold::contact_axis`), not the detection
 //! tests' normal, with speculative points for gaps that may close within the step
-//! (`Params::speculative_distance`). Rows are solved lowest first, so one sweep carries a
+//! (`Params::speculative_distance`). A pair that has hardly moved since its points were found
+//! keeps them (contact recycling). Constraints are solved lowest first, so one sweep carries a
 //! stack's support from the ground up.
 //!
-//! It takes the contacts `resolve` leaves: under gravity every contact (impacts were bounced
-//! there, resting ones are held here with no bounce), and contacts with friction. Without
-//! gravity and friction it does nothing, so the paper's frictionless results are unchanged.
-//! `correct` leaves the pairs held here alone.
+//! It takes every contact under gravity (impacts bounce here, per point, after the substeps)
+//! and every contact with friction. Without gravity and friction it does nothing, so the
+//! paper's frictionless results, `resolve`'s, are unchanged. `correct` leaves the pairs held
+//! here alone.
 
 use crate::bodies::Bodies;
 use crate::contact::{Contact, Feature, Pair, PairState};
 use crate::manifold::{ClipScratch, Manifold, contact_axis, manifold, support_point};
-use crate::math::{Scalar, Vector, exp_map};
-use crate::step::{CachedManifold, CachedPoint, RowAxis, SolverRow, StepContext};
+use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
+use crate::solver::{self, Batch, Constraint, ContactPoint, Friction, LANES, Softness, SolverBody};
+use crate::step::{CachedManifold, Geometry, HeldPair, SolveScratch, StepContext};
 use hecs::World;
 use rayon::prelude::*;
 
-/// A cached point matches a new one within this distance in A's body frame [fraction of A's
-/// radius]: the same corner one step later.
+/// A new point takes the impulse of last step's point within this distance on A [fraction of
+/// A's radius]: the same corner one step later.
 const MATCH_DISTANCE: Scalar = 0.05;
 
-/// Holds resting contacts and applies friction (see the module docs).
+/// Fastest push out of a penetration [m/s] (Box2D v3's and rapier's 3 m/s): faster, a cube
+/// squeezed into a pile is shot out of it.
+const MAX_PUSH: Scalar = 3.0;
+
+/// Relative motion [fraction of the thinner body] below which a pair keeps last step's contact
+/// points: rapier recycles below 5 cm; a tenth of that keeps a sliding or tipping body's
+/// points fresh.
+const RECYCLE_DISTANCE: Scalar = 0.005;
+
+/// Holds resting contacts, applies friction and bounces impacts (see the module docs).
 ///
-/// - Reads: `ctx.pairs` (`Found`, `Resolved`), `ctx.posed`, `ctx.bodies`, `ctx.scratch.solve`.
+/// - Reads: `ctx.pairs` (`Candidate`, `Found`, `Resolved`), `ctx.posed`, `ctx.bodies`,
+///   `ctx.scratch.solve`.
 /// - Writes: `ctx.bodies` velocities and the poses of the bodies it holds (and the world's),
 ///   `ctx.stats.impulses` (one per pair held), the warm-start cache.
 /// - Paper: none (resting contact and friction are the paper's future work).
-/// - Cost: O(P) to build P points, O(P · substeps · (iterations + 2)) to solve.
+/// - Cost: O(P) to find and build P points, O(P · substeps · (iterations + 2)) to solve.
 pub fn solve(world: &mut World, ctx: &mut StepContext) {
     let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
     let resting = |p: &Pair| params.resting_contacts(dt, b.pair_friction(p.a as usize, p.b as usize));
@@ -44,351 +58,367 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
     s.pairs.extend(ctx.pairs.iter().filter(|p| (p.contact().is_some() || p.is_candidate()) && resting(p)).copied());
     if s.pairs.is_empty() {
         s.cache.clear();
-        s.rows.clear();
+        s.held.clear();
+        s.batches.clear();
         return;
     }
     ctx.pose_pairs(|p| p.contact().is_some() || p.is_candidate());
-    let s = &mut ctx.scratch.solve;
-    let (posed, meshes, b, params, dt) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params, ctx.dt);
-    let margin = params.contact_margin;
-    s.manifolds.resize(s.pairs.len(), Manifold::default());
-    s.near.clear();
-    s.near.extend(s.pairs.iter().map(Pair::is_candidate));
-    s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut()).for_each_init(ClipScratch::default, |scratch, (pair, m)| {
-        let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
-        let thin = b.thinner(meshes, pair.a as usize, pair.b as usize);
-        // Held along the pair's least-overlap axis (see `contact_axis`), touching or a hair
-        // apart (speculatively); the tests' own normal and depth decide only that it touches.
-        let (ia, ib) = (pair.a as usize, pair.b as usize);
-        let reach = margin * thin + params.speculative_distance(dt, b, ia) + params.speculative_distance(dt, b, ib);
-        let Some(axis) = contact_axis(pa, pb, (margin * thin, reach)) else {
-            m.len = 0;
-            pair.state = PairState::Candidate; // apart: no rows
-            return;
-        };
-        let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
-        let point = support_point(pa, pb, &axis);
-        pair.state = PairState::Resolved(Contact { point, normal: axis.normal, depth: -axis.separation, feature });
-        *m = manifold(pa, pb, &axis, reach, scratch);
-        if m.len == 0 {
-            // Edge across edge, or no vertex on the other body: one point where they meet.
-            (m.points[0], m.gaps[0], m.len) = (point, axis.separation, 1);
-        }
-    });
-    build_rows(ctx);
+    find_manifolds(ctx);
+    build_constraints(ctx);
     substeps(ctx);
     remember(ctx);
     ctx.bodies.store(world);
 }
 
-/// One row per manifold point: lever arms, tangent basis, effective masses, and the impulses
-/// of the matching point of the previous step.
-fn build_rows(ctx: &mut StepContext) {
-    let b = &ctx.bodies;
+/// Each pair's manifold: recycled from the previous step when the two bodies have hardly
+/// moved relative to each other (`still`), else found afresh along the pair's least-overlap
+/// axis (`contact_axis`, `manifold`).
+fn find_manifolds(ctx: &mut StepContext) {
     let s = &mut ctx.scratch.solve;
-    s.rows.clear();
+    let (posed, meshes, b, params, dt) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params, ctx.dt);
+    let margin = params.contact_margin;
+    let n = s.pairs.len();
+    s.manifolds.resize(n, Manifold::default());
+    s.geometry.resize(n, Geometry::default());
+    s.recycled.resize(n, false);
+    s.near.clear();
+    s.near.extend(s.pairs.iter().map(Pair::is_candidate));
+    let cache = &s.cache;
+    let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
+    let rows = rows.zip(s.geometry.par_iter_mut().zip(s.recycled.par_iter_mut()));
+    rows.for_each_init(ClipScratch::default, |scratch, ((pair, m), (geometry, recycled))| {
+        let (ia, ib) = (pair.a as usize, pair.b as usize);
+        let thin = b.thinner(meshes, ia, ib);
+        let reach = margin * thin + params.speculative_distance(dt, b, ia) + params.speculative_distance(dt, b, ib);
+        let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
+        let old = cache.binary_search_by_key(&(pair.a, pair.b), |e| e.0).ok().map(|i| &cache[i].1.geometry);
+        *recycled = false;
+        if let Some(old) = old.filter(|g| still(g, b, ia, ib, RECYCLE_DISTANCE * thin)) {
+            *recycled = true;
+            *geometry = *old;
+            *m = placed(old, b, ia, ib);
+            let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y])).unwrap_or(0);
+            if m.len == 0 || m.gaps[deepest] > reach {
+                m.len = 0;
+                pair.state = PairState::Candidate; // drawn apart
+            } else {
+                let normal = b.rotation[ia] * old.normal;
+                pair.state =
+                    PairState::Resolved(Contact { point: m.points[deepest], normal, depth: -m.gaps[deepest], feature });
+            }
+            return;
+        }
+        let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
+        // Held along the pair's least-overlap axis (see `contact_axis`), touching or a hair
+        // apart (speculatively); the tests' own normal and depth decide only that it touches.
+        let Some(axis) = contact_axis(pa, pb, (margin * thin, reach)) else {
+            m.len = 0;
+            pair.state = PairState::Candidate; // apart: no constraint
+            return;
+        };
+        let point = support_point(pa, pb, &axis);
+        pair.state = PairState::Resolved(Contact { point, normal: axis.normal, depth: -axis.separation, feature });
+        *m = manifold(pa, pb, &axis, reach, scratch);
+        if m.len == 0 {
+            // Edge across edge, or nothing left by the clipping: one point where they meet.
+            (m.points[0], m.gaps[0], m.len) = (point, axis.separation, 1);
+        }
+        *geometry = fixed_to_bodies(m, axis.normal, b, ia, ib);
+    });
+}
+
+/// True when B has moved, relative to A, by less than `distance` [m] since `g` was found: the
+/// shift of its centre plus the arc its rotation sweeps at its bounding radius.
+fn still(g: &Geometry, b: &Bodies, ia: usize, ib: usize, distance: Scalar) -> bool {
+    let (offset, turn) = relative(b, ia, ib);
+    let arc = turn.angle_between(g.turn) * b.radius[ib];
+    (offset - g.offset).length() + arc < distance
+}
+
+/// B's centre in A's frame and its orientation relative to A's.
+fn relative(b: &Bodies, ia: usize, ib: usize) -> (Vector, Quat) {
+    (b.rotation[ia].transpose() * (b.position[ib] - b.position[ia]), b.orientation[ia].inverse() * b.orientation[ib])
+}
+
+/// The manifold's points fixed to the bodies: each point's ends on A and on B (half its gap
+/// either side along the normal) in their body frames.
+fn fixed_to_bodies(m: &Manifold, normal: Vector, b: &Bodies, ia: usize, ib: usize) -> Geometry {
+    let (offset, turn) = relative(b, ia, ib);
+    let (ra, rb) = (b.rotation[ia].transpose(), b.rotation[ib].transpose());
+    let mut g = Geometry { offset, turn, normal: ra * normal, len: m.len, ..Geometry::default() };
+    for k in 0..m.len {
+        let half = normal * (0.5 * m.gaps[k]);
+        g.on_a[k] = ra * (m.points[k] + half - b.position[ia]);
+        g.on_b[k] = rb * (m.points[k] - half - b.position[ib]);
+    }
+    g
+}
+
+/// The manifold of the fixed points `g` at the bodies' current poses: each point halfway
+/// between its two ends, its gap their separation along the normal (turned with A).
+fn placed(g: &Geometry, b: &Bodies, ia: usize, ib: usize) -> Manifold {
+    let normal = b.rotation[ia] * g.normal;
+    let mut m = Manifold { len: g.len, ..Manifold::default() };
+    for k in 0..g.len {
+        let on_a = b.position[ia] + b.rotation[ia] * g.on_a[k];
+        let on_b = b.position[ib] + b.rotation[ib] * g.on_b[k];
+        (m.points[k], m.gaps[k]) = (0.5 * (on_a + on_b), (on_a - on_b).dot(normal));
+    }
+    m
+}
+
+/// One constraint per held pair and one point per manifold point (lever vectors, effective
+/// masses, the impulses of last step's matching point), placed in batches of independent
+/// constraints (`solver::place`), and the solver bodies they act on.
+fn build_constraints(ctx: &mut StepContext) {
+    let b = &ctx.bodies;
+    let (params, dt) = (&ctx.params, ctx.dt);
+    let s = &mut ctx.scratch.solve;
     // Lowest contacts first: each forward sweep then carries the support up a stack in one
     // pass. The order matters: top-down sweeps let a tall pyramid wobble. Ties keep pair order.
-    let up = -ctx.params.gravity.normalize_or_zero();
+    let up = -params.gravity.normalize_or_zero();
     s.order.clear();
-    s.order.extend(s.manifolds.iter().enumerate().map(|(k, m)| {
-        let height = m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len.max(1) as Scalar;
-        (height, k as u32)
-    }));
+    let held = s.manifolds.iter().enumerate().filter(|&(k, m)| m.len > 0 && s.pairs[k].contact().is_some());
+    s.order
+        .extend(held.map(|(k, m)| (m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar, k as u32)));
     s.order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    s.spans.clear();
-    for &(_, k) in &s.order {
-        let (pair, m, near) = (&s.pairs[k as usize], &s.manifolds[k as usize], s.near[k as usize]);
+    gather_bodies(b, s);
+    let fixed = s.moving.len() as u32;
+    s.slots.clear();
+    s.slots.extend(s.order.iter().map(|&(_, k)| {
+        let pair = &s.pairs[k as usize];
+        [s.slot[pair.a as usize], s.slot[pair.b as usize]]
+    }));
+    solver::place(&s.slots, fixed, &mut s.last, &mut s.fill, &mut s.placed);
+    s.batches.clear();
+    s.batches.extend(s.fill.iter().map(|_| Batch { lanes: [Constraint::idle(fixed); LANES], first: 0, len: 0 }));
+    for (&(_, k), &(batch, _)) in s.order.iter().zip(&s.placed) {
+        let batch = &mut s.batches[batch as usize];
+        batch.len = batch.len.max(s.manifolds[k as usize].len as u32);
+    }
+    let mut first = 0;
+    for batch in &mut s.batches {
+        batch.first = first;
+        first += batch.len;
+    }
+    s.points.clear();
+    s.points.resize(first as usize, [ContactPoint::IDLE; LANES]);
+    s.held.clear();
+    // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
+    // before integrating forces).
+    let before = |i: usize| b.velocity[i] - if b.is_fixed(i) { Vector::ZERO } else { params.gravity * dt };
+    for (&(_, k), &(batch, lane)) in s.order.iter().zip(&s.placed) {
+        let (pair, m) = (&s.pairs[k as usize], &s.manifolds[k as usize]);
+        let contact = pair.contact().expect("ordered pairs have contacts");
         let (ia, ib) = (pair.a as usize, pair.b as usize);
-        let Some(contact) = pair.contact() else { continue }; // apart along some axis
         let n = contact.normal;
-        let (t1, t2) = tangents(n);
-        let mu = b.pair_friction(ia, ib);
+        let tangents = tangents(n);
         let thin = b.thinner(&ctx.meshes, ia, ib);
+        let slot = [s.slot[ia], s.slot[ib]];
+        let scale = [s.scale[slot[0] as usize], s.scale[slot[1] as usize]];
         let inv_mass = [b.inv_mass[ia], b.inv_mass[ib]];
-        let inv_inertia = [&b.inv_inertia_world[ia], &b.inv_inertia_world[ib]];
-        let cached = s.cache.get(&(pair.a, pair.b));
-        let start = s.rows.len();
-        for (&p, &gap) in m.points().iter().zip(&m.gaps) {
+        let cached = s.cache.binary_search_by_key(&(pair.a, pair.b), |e| e.0).ok().map(|i| &s.cache[i].1);
+        let mu = b.pair_friction(ia, ib);
+        let (geometry, recycled) = (&s.geometry[k as usize], s.recycled[k as usize]);
+        let into = &mut s.batches[batch as usize];
+        let first = into.first as usize;
+        s.held.push(HeldPair { pair: k, batch, lane, len: m.len as u8 });
+        // The friction patch's centre: the mean of the points.
+        let centre = m.points().iter().sum::<Vector>() / m.len as Scalar;
+        for (j, (&p, &gap)) in m.points().iter().zip(&m.gaps).enumerate() {
             let r = [p - b.position[ia], p - b.position[ib]];
-            let axis = |dir: Vector| {
-                let arm = [r[0].cross(dir), r[1].cross(dir)];
-                let spin = [*inv_inertia[0] * arm[0], *inv_inertia[1] * arm[1]];
-                let k = inv_mass[0] + inv_mass[1] + arm[0].dot(spin[0]) + arm[1].dot(spin[1]);
-                RowAxis { dir, arm, spin, mass: if k > 0.0 { 1.0 / k } else { 0.0 } }
-            };
-            let local = b.rotation[ia].transpose() * r[0];
-            let reach = MATCH_DISTANCE * b.radius[ia];
-            let old = cached.and_then(|c| c.points().iter().find(|q| (q.local - local).length() <= reach));
-            let (jn, jt) = old.map_or((0.0, Vector::ZERO), |q| (q.normal, q.tangent));
-            s.rows.push(SolverRow {
-                a: pair.a,
-                b: pair.b,
-                feature: (!near).then_some(contact.feature),
-                inv_mass,
-                local,
-                axes: [axis(n), axis(t1), axis(t2)],
-                mu,
-                gap,
-                slop: ctx.params.slop * thin,
-                max_push: ctx.params.max_correction * thin / ctx.dt,
-                impulse: [jn, jt.dot(t1), jt.dot(t2)],
+            let g = [scale[0] * r[0].cross(n), scale[1] * r[1].cross(n)];
+            let approach =
+                (before(ia) + b.angular_velocity[ia].cross(r[0]) - before(ib) - b.angular_velocity[ib].cross(r[1]))
+                    .dot(n);
+            // A recycled point is last step's own; a new one takes the impulse of the old
+            // point at the same place on A, if any.
+            let old = cached.and_then(|c| {
+                let near = |q: usize| (c.geometry.on_a[q] - geometry.on_a[j]).length() <= MATCH_DISTANCE * b.radius[ia];
+                if recycled { Some(j) } else { (0..c.geometry.len).find(|&q| near(q)) }.map(|q| c.normal[q])
             });
+            s.points[first + j][lane as usize] = ContactPoint {
+                g,
+                mass: inverse(inv_mass[0] + inv_mass[1] + g[0].length_squared() + g[1].length_squared()),
+                impulse: old.unwrap_or(0.0),
+                gap,
+                approach,
+                max_impulse: 0.0,
+                lever: (p - centre).length(),
+            };
         }
-        if s.rows.len() > start {
-            s.spans.push((start as u32, (s.rows.len() - start) as u32));
+        into.lanes[lane as usize] = Constraint {
+            slot,
+            normal: n,
+            tangents,
+            inv_mass,
+            mu,
+            restitution: 0.5 * (b.restitution[ia] + b.restitution[ib]),
+            slop: params.slop * thin,
+            max_push: (params.max_correction * thin / dt).min(MAX_PUSH),
+            friction: if mu > 0.0 {
+                friction_patch(centre, [b.position[ia], b.position[ib]], n, tangents, inv_mass, scale, cached)
+            } else {
+                Friction::IDLE
+            },
+        };
+    }
+}
+
+/// 1/k, or 0 for k = 0 (a row between two fixed bodies, or an idle one).
+fn inverse(k: Scalar) -> Scalar {
+    if k > 0.0 { 1.0 / k } else { 0.0 }
+}
+
+/// The friction rows of a pair at its patch `centre` (see `solver::Friction`), warm-started
+/// from last step's patch impulses.
+fn friction_patch(
+    centre: Vector,
+    position: [Vector; 2],
+    n: Vector,
+    tangents: [Vector; 2],
+    inv_mass: [Scalar; 2],
+    scale: [Mat3; 2],
+    cached: Option<&CachedManifold>,
+) -> Friction {
+    let r = [centre - position[0], centre - position[1]];
+    let g = tangents.map(|t| [scale[0] * r[0].cross(t), scale[1] * r[1].cross(t)]);
+    // K = J M⁻¹ Jᵀ over the two tangent rows (their linear parts are orthogonal).
+    let linear = inv_mass[0] + inv_mass[1];
+    let k11 = linear + g[0][0].length_squared() + g[0][1].length_squared();
+    let k22 = linear + g[1][0].length_squared() + g[1][1].length_squared();
+    let k12 = g[0][0].dot(g[1][0]) + g[0][1].dot(g[1][1]);
+    let det = k11 * k22 - k12 * k12;
+    let mass = if det > 0.0 { [k22 / det, -k12 / det, k11 / det] } else { [inverse(k11), 0.0, inverse(k22)] };
+    let twist = [scale[0] * n, scale[1] * n];
+    let (jt, jw) = cached.map_or((Vector::ZERO, Vector::ZERO), |c| (c.tangent, c.twist));
+    Friction {
+        g,
+        twist,
+        mass,
+        twist_mass: inverse(twist[0].length_squared() + twist[1].length_squared()),
+        impulse: [jt.dot(tangents[0]), jt.dot(tangents[1]), jw.dot(n)],
+    }
+}
+
+/// Gives each free body of the held pairs a solver body (in actor order), every fixed body the
+/// static slot after them, and computes each one's S = (I⁻¹)^½ in world axes:
+/// S = R diag(1/√I_p) Rᵀ with R the principal frame in world axes.
+fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
+    for &i in &s.moving {
+        s.slot[i as usize] = u32::MAX;
+    }
+    s.slot.resize(b.len(), u32::MAX);
+    s.moving.clear();
+    let ends = s.order.iter().flat_map(|&(_, k)| [s.pairs[k as usize].a, s.pairs[k as usize].b]);
+    s.moving.extend(ends.filter(|&i| !b.is_fixed(i as usize)));
+    s.moving.sort_unstable();
+    s.moving.dedup();
+    let fixed = s.moving.len() as u32;
+    for (k, &i) in s.moving.iter().enumerate() {
+        s.slot[i as usize] = k as u32;
+    }
+    for pair in &s.pairs {
+        for i in [pair.a, pair.b] {
+            if b.is_fixed(i as usize) {
+                s.slot[i as usize] = fixed;
+            }
         }
     }
+    s.scale.clear();
+    s.scale.extend(s.moving.iter().map(|&i| {
+        let i = i as usize;
+        let r = Mat3::from_quat(b.orientation[i] * b.principal_axes[i]);
+        r * Mat3::from_diagonal(b.principal_moments[i].map(|m| 1.0 / m.sqrt())) * r.transpose()
+    }));
+    s.scale.push(Mat3::ZERO);
+    s.bodies.clear();
+    s.bodies.extend(s.moving.iter().zip(&s.scale).map(|(&i, scale)| {
+        let i = i as usize;
+        SolverBody { v: b.velocity[i], w: scale.inverse() * b.angular_velocity[i], ..SolverBody::default() }
+    }));
+    s.bodies.push(SolverBody::default());
 }
 
 /// Two unit vectors completing `n` to a right-handed orthonormal basis.
-fn tangents(n: Vector) -> (Vector, Vector) {
+fn tangents(n: Vector) -> [Vector; 2] {
     let helper = if n.x.abs() < 0.57 { Vector::X } else { Vector::Y };
     let t1 = n.cross(helper).normalize();
-    (t1, n.cross(t1))
-}
-
-/// The relative motion of A against B along `axis` at the row's point, given each body's
-/// (linear, angular) pair: a speed from velocities, a displacement from the substeps' `delta`.
-#[inline(always)]
-fn along(axis: &RowAxis, (la, aa): (Vector, Vector), (lb, ab): (Vector, Vector)) -> Scalar {
-    (la - lb).dot(axis.dir) + aa.dot(axis.arm[0]) - ab.dot(axis.arm[1])
-}
-
-/// Applies an impulse of `j` along `axis` at the row's point: +j on A, −j on B.
-#[inline(always)]
-fn push(b: &mut Bodies, row: &SolverRow, axis: &RowAxis, j: Scalar) {
-    let (ia, ib) = (row.a as usize, row.b as usize);
-    b.velocity[ia] += axis.dir * (j * row.inv_mass[0]);
-    b.angular_velocity[ia] += axis.spin[0] * j;
-    b.velocity[ib] -= axis.dir * (j * row.inv_mass[1]);
-    b.angular_velocity[ib] -= axis.spin[1] * j;
-}
-
-/// Damping ratio of the soft contact (Box2D v3's default): heavily overdamped, so pushing a
-/// penetration out never overshoots into a bounce.
-const CONTACT_DAMPING_RATIO: Scalar = 10.0;
-
-/// Stiffness of the soft contact as a fraction of the substep rate: a quarter, Box2D v3's upper
-/// bound for a stable spring (120 Hz with 8 substeps of a 1/60 s step). A soft contact sinks
-/// under load by (load)/(effective mass · ω²), so the stiffest stable spring keeps a 40-row
-/// pyramid's bottom row within a millimetre or two.
-const CONTACT_HERTZ_PER_SUBSTEP_RATE: Scalar = 0.25;
-
-/// The soft-constraint coefficients of a contact for substep `h` (Catto, "Solver2D", 2024): a
-/// damped spring of `CONTACT_HERTZ_PER_SUBSTEP_RATE` written as a bias rate and mass/impulse scales.
-#[derive(Clone, Copy, Debug)]
-struct Softness {
-    bias_rate: Scalar,
-    mass_scale: Scalar,
-    impulse_scale: Scalar,
-}
-
-impl Softness {
-    fn new(h: Scalar) -> Self {
-        let omega = 2.0 * std::f64::consts::PI * CONTACT_HERTZ_PER_SUBSTEP_RATE / h;
-        let a1 = 2.0 * CONTACT_DAMPING_RATIO + h * omega;
-        let a2 = h * omega * a1;
-        let a3 = 1.0 / (1.0 + a2);
-        Self { bias_rate: omega / a1, mass_scale: a2 * a3, impulse_scale: a3 }
-    }
+    [t1, n.cross(t1)]
 }
 
 /// The substepped solve (a "soft step", as in Box2D v3 and rapier's TGS): the step is cut into
 /// `substeps` of length h. Each substep adds its share of gravity, re-applies the accumulated
 /// impulses, solves with soft position feedback from the gaps as they stand after the earlier
 /// substeps, moves the bodies' (virtual) displacements on, and relaxes: a rigid pass that takes
-/// back the push-out velocity so penetration is removed without adding energy. Positions then
-/// end where the substeps took them: `integrate` adds v·dt, so `solve` moves each body by the
-/// rest. Gravity's change of velocity, which the `gravity` system applied whole, is re-timed
-/// over the substeps (net change unchanged), so a stack's weight is carried substep by substep.
+/// back the push-out velocity so penetration is removed without adding energy. Then impacts
+/// bounce (`solver::restitution`). Positions end where the substeps took them: `integrate` adds
+/// v·dt, so `solve` moves each body by the rest. Gravity's change of velocity, which the
+/// `gravity` system applied whole, is re-timed over the substeps (net change unchanged), so a
+/// stack's weight is carried substep by substep.
 fn substeps(ctx: &mut StepContext) {
     let (params, dt) = (&ctx.params, ctx.dt);
     let count = params.substeps.max(1);
     let h = dt / Scalar::from(count);
     let soft = Softness::new(h);
     let s = &mut ctx.scratch.solve;
-    let b = &mut ctx.bodies;
-    s.moving.clear();
-    s.moving.extend(s.rows.iter().flat_map(|r| [r.a, r.b]).filter(|&i| b.inv_mass[i as usize] > 0.0));
-    s.moving.sort_unstable();
-    s.moving.dedup();
-    s.delta.clear();
-    s.delta.resize(b.len(), (Vector::ZERO, Vector::ZERO));
+    let free = s.moving.len();
     let (g_step, g_sub) = (params.gravity * dt, params.gravity * h);
-    for &i in &s.moving {
-        b.velocity[i as usize] -= g_step;
+    for body in &mut s.bodies[..free] {
+        body.v -= g_step;
     }
     for _ in 0..count {
-        for &i in &s.moving {
-            b.velocity[i as usize] += g_sub;
+        for body in &mut s.bodies[..free] {
+            body.v += g_sub;
         }
-        warm_start(b, &s.rows);
+        solver::warm_start(&mut s.bodies, &s.batches, &mut s.points);
         for _ in 0..params.iterations {
-            iterate(b, &mut s.rows, &s.spans, &s.delta, h, Some(soft));
+            solver::sweep(&mut s.bodies, &mut s.batches, &mut s.points, h, Some(soft));
         }
-        for &i in &s.moving {
-            let i = i as usize;
-            s.delta[i].0 += b.velocity[i] * h;
-            s.delta[i].1 += b.angular_velocity[i] * h;
+        for body in &mut s.bodies[..free] {
+            body.dx += body.v * h;
+            body.dq += body.w * h;
         }
-        iterate(b, &mut s.rows, &s.spans, &s.delta, h, None);
+        solver::sweep(&mut s.bodies, &mut s.batches, &mut s.points, h, None);
     }
-    for &i in &s.moving {
+    solver::restitution(&mut s.bodies, &s.batches, &mut s.points, params.restitution_threshold(dt));
+    let b = &mut ctx.bodies;
+    for ((&i, body), scale) in s.moving.iter().zip(&s.bodies).zip(&s.scale) {
         let i = i as usize;
-        let (dx, dtheta) = s.delta[i];
-        b.position[i] += dx - b.velocity[i] * dt;
-        b.orientation[i] = (exp_map(dtheta - b.angular_velocity[i] * dt) * b.orientation[i]).normalize();
+        b.velocity[i] = body.v;
+        b.angular_velocity[i] = *scale * body.w;
+        b.position[i] += body.dx - body.v * dt;
+        b.orientation[i] = (exp_map(*scale * body.dq - b.angular_velocity[i] * dt) * b.orientation[i]).normalize();
     }
-    for i in 0..ctx.scratch.solve.moving.len() {
-        ctx.mark_moved(ctx.scratch.solve.moving[i] as usize);
-    }
-}
-
-/// Re-applies the accumulated impulses (last step's at the first substep): a resting stack
-/// starts each substep near its solution.
-fn warm_start(b: &mut Bodies, rows: &[SolverRow]) {
-    for row in rows {
-        for (axis, &j) in row.axes.iter().zip(&row.impulse) {
-            push(b, row, axis, j);
-        }
+    for k in 0..ctx.scratch.solve.moving.len() {
+        ctx.mark_moved(ctx.scratch.solve.moving[k] as usize);
     }
 }
 
-/// One Gauss–Seidel sweep through the rows, lowest contacts first (see `build_rows`). At
-/// each point the normal impulse first (accumulated, never pulling), then friction within the
-/// Coulomb cone of it.
-///
-/// The gap is the step's starting gap moved on by the substeps' displacements `delta`
-/// (linearised about the step's start). A gap still open may close within this substep
-/// (speculative contact, u_n ≥ −gap/h); a penetration is pushed out by the soft spring when
-/// `soft` is given (the solve pass), never faster than the row's cap, and not at all when it
-/// is `None` (the relax pass, which takes the push-out velocity back).
-fn iterate(
-    b: &mut Bodies,
-    rows: &mut [SolverRow],
-    spans: &[(u32, u32)],
-    delta: &[(Vector, Vector)],
-    h: Scalar,
-    soft: Option<Softness>,
-) {
-    for &(start, len) in spans {
-        let pair = &mut rows[start as usize..(start + len) as usize];
-        // The relax pass takes a pair's points in the reverse order, so neither end of a
-        // manifold is always first: a box landing flat is stopped evenly at its corners.
-        if soft.is_none() {
-            pair.iter_mut().rev().for_each(|row| solve_point(b, row, delta, h, soft));
-        } else {
-            pair.iter_mut().for_each(|row| solve_point(b, row, delta, h, soft));
-        }
-    }
-}
-
-/// The velocities of a row's two bodies, held in registers while the row is solved: its
-/// three impulses then update them without a round trip through memory each.
-#[derive(Clone, Copy)]
-struct Motion {
-    a: (Vector, Vector),
-    b: (Vector, Vector),
-}
-
-impl Motion {
-    #[inline(always)]
-    fn load(b: &Bodies, row: &SolverRow) -> Self {
-        let (ia, ib) = (row.a as usize, row.b as usize);
-        Self { a: (b.velocity[ia], b.angular_velocity[ia]), b: (b.velocity[ib], b.angular_velocity[ib]) }
-    }
-
-    #[inline(always)]
-    fn store(self, b: &mut Bodies, row: &SolverRow) {
-        let (ia, ib) = (row.a as usize, row.b as usize);
-        (b.velocity[ia], b.angular_velocity[ia]) = self.a;
-        (b.velocity[ib], b.angular_velocity[ib]) = self.b;
-    }
-
-    /// Relative speed of A against B along `axis`.
-    #[inline(always)]
-    fn speed(&self, axis: &RowAxis) -> Scalar {
-        along(axis, self.a, self.b)
-    }
-
-    /// An impulse of `j` along `axis`: +j on A, −j on B (as `push`).
-    #[inline(always)]
-    fn push(&mut self, row: &SolverRow, axis: &RowAxis, j: Scalar) {
-        self.a.0 += axis.dir * (j * row.inv_mass[0]);
-        self.a.1 += axis.spin[0] * j;
-        self.b.0 -= axis.dir * (j * row.inv_mass[1]);
-        self.b.1 -= axis.spin[1] * j;
-    }
-}
-
-/// One point: its normal impulse, then its friction.
-#[inline(always)]
-fn solve_point(b: &mut Bodies, row: &mut SolverRow, delta: &[(Vector, Vector)], h: Scalar, soft: Option<Softness>) {
-    let mut m = Motion::load(b, row);
-    normal_point(&mut m, row, delta, h, soft);
-    if row.mu > 0.0 {
-        friction_point(&mut m, row);
-    }
-    m.store(b, row);
-}
-
-/// The normal impulse at one point (see `iterate`).
-#[inline(always)]
-fn normal_point(m: &mut Motion, row: &mut SolverRow, delta: &[(Vector, Vector)], h: Scalar, soft: Option<Softness>) {
-    let n = row.axes[0];
-    let gap = row.gap + along(&n, delta[row.a as usize], delta[row.b as usize]);
-    let (bias, mass_scale, impulse_scale) = match soft {
-        _ if gap > 0.0 => (gap / h, 1.0, 0.0),
-        Some(k) if gap + row.slop < 0.0 => {
-            ((k.bias_rate * (gap + row.slop)).max(-row.max_push), k.mass_scale, k.impulse_scale)
-        }
-        _ => (0.0, 1.0, 0.0),
-    };
-    let dj = -n.mass * mass_scale * (m.speed(&n) + bias) - impulse_scale * row.impulse[0];
-    let jn = (row.impulse[0] + dj).max(0.0);
-    m.push(row, &n, jn - row.impulse[0]);
-    row.impulse[0] = jn;
-}
-
-/// The friction impulse at one point, within the Coulomb cone of its normal impulse.
-#[inline(always)]
-fn friction_point(m: &mut Motion, row: &mut SolverRow) {
-    let [_, t1, t2] = row.axes;
-    let (mut j1, mut j2) = (row.impulse[1] - m.speed(&t1) * t1.mass, row.impulse[2] - m.speed(&t2) * t2.mass);
-    let limit = row.mu * row.impulse[0];
-    let len2 = j1 * j1 + j2 * j2;
-    // Compared squared: the square root (a long-latency instruction on the solver's critical
-    // path) is only taken when the impulse leaves the cone.
-    if len2 > limit * limit {
-        let len = len2.sqrt();
-        (j1, j2) = (j1 * limit / len, j2 * limit / len);
-    }
-    m.push(row, &t1, j1 - row.impulse[1]);
-    m.push(row, &t2, j2 - row.impulse[2]);
-    (row.impulse[1], row.impulse[2]) = (j1, j2);
-}
-
-/// Keeps this step's impulses for the next step's warm start, and counts one impulse per pair
+/// Keeps this step's geometry and impulses for the next step, and counts one impulse per pair
 /// held (by the feature that found its contact; near pairs no test found are not counted).
 fn remember(ctx: &mut StepContext) {
     let s = &mut ctx.scratch.solve;
     s.cache.clear();
-    let mut held: Option<(u32, u32)> = None;
-    for row in &s.rows {
-        let entry: &mut CachedManifold = s.cache.entry((row.a, row.b)).or_default();
-        if entry.len < entry.points.len() {
-            let [jn, j1, j2] = row.impulse;
-            let tangent = row.axes[1].dir * j1 + row.axes[2].dir * j2;
-            entry.points[entry.len] = CachedPoint { local: row.local, normal: jn, tangent };
-            entry.len += 1;
+    for held in &s.held {
+        let pair = &s.pairs[held.pair as usize];
+        let batch = &s.batches[held.batch as usize];
+        let c = &batch.lanes[held.lane as usize];
+        let [j1, j2, jw] = c.friction.impulse;
+        let mut entry = CachedManifold {
+            geometry: s.geometry[held.pair as usize],
+            tangent: c.tangents[0] * j1 + c.tangents[1] * j2,
+            twist: c.normal * jw,
+            ..CachedManifold::default()
+        };
+        for j in 0..usize::from(held.len) {
+            entry.normal[j] = s.points[batch.first as usize + j][held.lane as usize].impulse;
         }
-        if let Some(feature) = row.feature
-            && row.impulse[0] > 0.0
-            && held != Some((row.a, row.b))
-        {
-            held = Some((row.a, row.b));
-            ctx.stats.impulses[feature as usize] += 1;
+        s.cache.push(((pair.a, pair.b), entry));
+        let pushed = entry.normal.iter().any(|&j| j > 0.0);
+        if let (Some(contact), false, true) = (pair.contact(), s.near[held.pair as usize], pushed) {
+            ctx.stats.impulses[contact.feature as usize] += 1;
         }
     }
+    s.cache.sort_unstable_by_key(|e| e.0);
 }

@@ -74,7 +74,7 @@ fn without_gravity_and_friction_the_contact_solver_is_idle() {
     // The paper's model is the e = 1 / no-friction special case: solve does nothing there.
     let mut sim = sim_of("face-collision.ron", |_| {});
     sim.run(20).expect("finite");
-    assert!(sim.ctx.scratch.solve.rows.is_empty());
+    assert!(sim.ctx.scratch.solve.held.is_empty());
     assert_eq!(sim.contacts, [1, 0, 0]);
 }
 
@@ -96,7 +96,7 @@ fn with_sleeping_on_a_settled_pyramid_falls_asleep_and_stays_exactly_put() {
     let before = sim.actors();
     sim.run(60).expect("finite");
     assert_eq!(sim.actors(), before, "asleep, nothing moves, not even by round-off");
-    assert_eq!(sim.ctx.scratch.solve.rows.len(), 0, "no pair of sleeping cubes is solved");
+    assert_eq!(sim.ctx.scratch.solve.held.len(), 0, "no pair of sleeping cubes is solved");
 }
 
 #[test]
