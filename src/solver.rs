@@ -16,6 +16,10 @@
 //! A batch never reorders two constraints that share a free body, and the others do not
 //! interact, so the result is exactly that of solving them one by one in the given order.
 
+// Lane loops (`for l in 0..LANES`) index several lane arrays in step: the ends, the
+// constraints and the points of a batch; an index reads plainer than a four-way zip.
+#![allow(clippy::needless_range_loop)]
+
 use crate::math::{Scalar, Vector};
 
 /// A body as the substeps see it.
@@ -136,12 +140,23 @@ pub struct ContactPoint {
     pub max_impulse: Scalar,
     /// Distance from the friction centre [m]: the point's lever against twisting.
     pub lever: Scalar,
+    /// For the first point of a pair (0 of 0–1, 2 of 2–3), the off-diagonal K₀₁ of the pair's
+    /// effective-mass matrix, m_a⁻¹ + m_b⁻¹ + g_a·g'_a + g_b·g'_b [1/kg]; else 0.
+    pub coupling: Scalar,
 }
 
 impl ContactPoint {
     /// A point that applies nothing (zero effective mass).
-    pub const IDLE: Self =
-        Self { g: [Vector::ZERO; 2], mass: 0.0, impulse: 0.0, gap: 0.0, approach: 0.0, max_impulse: 0.0, lever: 0.0 };
+    pub const IDLE: Self = Self {
+        g: [Vector::ZERO; 2],
+        mass: 0.0,
+        impulse: 0.0,
+        gap: 0.0,
+        approach: 0.0,
+        max_impulse: 0.0,
+        lever: 0.0,
+        coupling: 0.0,
+    };
 }
 
 /// Places constraints, given in solving order by their solver-body slots, into batches of
@@ -328,13 +343,14 @@ pub fn sweep(
     for batch in batches {
         let mut ends = open(bodies, batch);
         let entries = entries(batch, points);
+        // Points go in pairs (0, 1), (2, 3): a manifold's diagonals (`manifold::reduce`).
         if soft.is_none() {
-            for entry in entries.iter_mut().rev() {
-                normal_entry(&mut ends, &batch.lanes, entry, h, soft);
+            for pair in entries.chunks_mut(2).rev() {
+                normal_pair(&mut ends, &batch.lanes, pair, h, soft);
             }
         } else {
-            for entry in entries.iter_mut() {
-                normal_entry(&mut ends, &batch.lanes, entry, h, soft);
+            for pair in entries.chunks_mut(2) {
+                normal_pair(&mut ends, &batch.lanes, pair, h, soft);
             }
         }
         if soft.is_none() {
@@ -348,18 +364,101 @@ pub fn sweep(
     }
 }
 
-/// The normal rows of one point of each lane.
+/// The normal rows of a pair of points (or a last single one) of each lane.
 #[inline(always)]
-fn normal_entry(
+fn normal_pair(
     ends: &mut [Ends; LANES],
     lanes: &[Constraint; LANES],
-    entry: &mut [ContactPoint; LANES],
+    pair: &mut [[ContactPoint; LANES]],
     h: Scalar,
     soft: Option<Softness>,
 ) {
-    for l in 0..LANES {
-        normal_impulse(&mut ends[l], &lanes[l], &mut entry[l], h, soft);
+    match pair {
+        [first, second] => {
+            for l in 0..LANES {
+                normal_block(&mut ends[l], &lanes[l], &mut first[l], &mut second[l], h, soft);
+            }
+        }
+        [single] => {
+            for l in 0..LANES {
+                normal_impulse(&mut ends[l], &lanes[l], &mut single[l], h, soft);
+            }
+        }
+        _ => {}
     }
+}
+
+/// What a normal row asks of its impulse this pass: the velocity bias and the compliance
+/// (see `normal_impulse`). The soft step's update Δλ = −m·s_m (u + b) − s_i λ is a
+/// Gauss–Seidel step on the compliant row u + b + C λ = 0 with C = k s_i / s_m, k = 1/m.
+#[inline(always)]
+fn row_target(e: &Ends, c: &Constraint, p: &ContactPoint, h: Scalar, soft: Option<Softness>) -> (Scalar, Scalar) {
+    let g = &p.g;
+    let gap = p.gap + (e.a.dx - e.b.dx).dot(c.normal) + e.a.dq.dot(g[0]) - e.b.dq.dot(g[1]);
+    match soft {
+        _ if gap > 0.0 => (gap / h, 0.0),
+        Some(k) if gap + c.slop < 0.0 && p.mass > 0.0 => {
+            ((k.bias_rate * (gap + c.slop)).max(-c.max_push), k.impulse_scale / (k.mass_scale * p.mass))
+        }
+        _ => (0.0, 0.0),
+    }
+}
+
+/// Two normal rows of one manifold solved together: the 2×2 linear complementarity problem
+/// (K + C) Δλ = −(u + b + C λ), λ + Δλ ≥ 0, by trying which rows push (Box2D v2's block solver,
+/// here over a manifold's diagonals, whose rows fight each other: pushing one corner tips the
+/// body away from the opposite one, so one Gauss–Seidel sweep of the four corners of a box
+/// landing flat leaves it spinning, and the next substep's warm start bounces it).
+#[inline(always)]
+fn normal_block(
+    e: &mut Ends,
+    c: &Constraint,
+    p: &mut ContactPoint,
+    q: &mut ContactPoint,
+    h: Scalar,
+    soft: Option<Softness>,
+) {
+    if q.mass == 0.0 || p.mass == 0.0 {
+        normal_impulse(e, c, p, h, soft);
+        normal_impulse(e, c, q, h, soft);
+        return;
+    }
+    let n = c.normal;
+    let ((bp, cp), (bq, cq)) = (row_target(e, c, p, h, soft), row_target(e, c, q, h, soft));
+    let r = [e.speed(n, &p.g) + bp + cp * p.impulse, e.speed(n, &q.g) + bq + cq * q.impulse];
+    let (m00, m11, m01) = (1.0 / p.mass + cp, 1.0 / q.mass + cq, p.coupling);
+    let lambda = [p.impulse, q.impulse];
+    let det = m00 * m11 - m01 * m01;
+    // Both push; only the first; only the second; neither.
+    let both = (det > 1e-12 * m00 * m11).then(|| {
+        let d = [-(m11 * r[0] - m01 * r[1]) / det, -(m00 * r[1] - m01 * r[0]) / det];
+        [lambda[0] + d[0], lambda[1] + d[1]]
+    });
+    let only_first = {
+        let l0 = lambda[0] - (r[0] - m01 * lambda[1]) / m00;
+        let w1 = r[1] + m01 * (l0 - lambda[0]) - m11 * lambda[1];
+        (l0 >= 0.0 && w1 >= 0.0).then_some([l0, 0.0])
+    };
+    let only_second = {
+        let l1 = lambda[1] - (r[1] - m01 * lambda[0]) / m11;
+        let w0 = r[0] + m01 * (l1 - lambda[1]) - m00 * lambda[0];
+        (l1 >= 0.0 && w0 >= 0.0).then_some([0.0, l1])
+    };
+    let neither = {
+        let w = [r[0] - m00 * lambda[0] - m01 * lambda[1], r[1] - m01 * lambda[0] - m11 * lambda[1]];
+        (w[0] >= 0.0 && w[1] >= 0.0).then_some([0.0, 0.0])
+    };
+    let Some(new) = both.filter(|l| l[0] >= 0.0 && l[1] >= 0.0).or(only_first).or(only_second).or(neither) else {
+        // Round-off left no case exact: one Gauss–Seidel step each.
+        normal_impulse(e, c, p, h, soft);
+        normal_impulse(e, c, q, h, soft);
+        return;
+    };
+    e.push(n, &p.g, c.inv_mass, new[0] - lambda[0]);
+    e.push(n, &q.g, c.inv_mass, new[1] - lambda[1]);
+    (p.impulse, q.impulse) = (new[0], new[1]);
+    p.max_impulse = p.max_impulse.max(new[0]);
+    q.max_impulse = q.max_impulse.max(new[1]);
 }
 
 /// The normal impulse at one point.

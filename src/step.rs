@@ -284,6 +284,10 @@ pub struct SleepState {
     pub speed: Vec<Scalar>,
     /// Scratch: body i may fall asleep this step.
     pub ready: Vec<bool>,
+    /// Where each body will end this step, as `sleep` last saw it (its position plus v·dt):
+    /// the distance to the next step's gives how far it really moved, which a contact that
+    /// stopped it within the step hides from its final velocity.
+    pub reached: Vec<Vector>,
 }
 
 impl SleepState {

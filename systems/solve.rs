@@ -245,7 +245,14 @@ fn build_constraints(ctx: &mut StepContext) {
                 approach,
                 max_impulse: 0.0,
                 lever: (p - centre).length(),
+                coupling: 0.0,
             };
+        }
+        // Each pair of points' coupling (`solver::ContactPoint::coupling`).
+        for j in (0..m.len.saturating_sub(1)).step_by(2) {
+            let (p, q) = (&s.points[first + j][lane as usize], &s.points[first + j + 1][lane as usize]);
+            let coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
+            s.points[first + j][lane as usize].coupling = coupling;
         }
         into.lanes[lane as usize] = Constraint {
             slot,
