@@ -83,8 +83,8 @@ impl Default for Params {
             slop: 0.0005,
             max_correction: 0.2,
             restitution_threshold: None,
-            substeps: 8,
-            iterations: 1,
+            substeps: 4,
+            iterations: 2,
             sleep: false,
             contact_margin: 0.02,
         }
