@@ -129,6 +129,8 @@ pub struct ContactPoint {
     pub g: [Vector; 2],
     /// Effective mass along the normal [kg] (0: an idle point).
     pub mass: Scalar,
+    /// Its inverse K_ii [1/kg] (0 for an idle point).
+    pub k: Scalar,
     /// Accumulated normal impulse of the current substep [N·s] (≥ 0).
     pub impulse: Scalar,
     /// Gap when the step began [m]: > 0 apart (speculative), < 0 penetrating.
@@ -150,6 +152,7 @@ impl ContactPoint {
     pub const IDLE: Self = Self {
         g: [Vector::ZERO; 2],
         mass: 0.0,
+        k: 0.0,
         impulse: 0.0,
         gap: 0.0,
         approach: 0.0,
@@ -212,6 +215,8 @@ pub struct Softness {
     bias_rate: Scalar,
     mass_scale: Scalar,
     impulse_scale: Scalar,
+    /// `impulse_scale / mass_scale`: the row's compliance per unit of its K_ii.
+    compliance: Scalar,
 }
 
 impl Softness {
@@ -222,7 +227,7 @@ impl Softness {
         let a1 = 2.0 * CONTACT_DAMPING_RATIO + h * omega;
         let a2 = h * omega * a1;
         let a3 = 1.0 / (1.0 + a2);
-        Self { bias_rate: omega / a1, mass_scale: a2 * a3, impulse_scale: a3 }
+        Self { bias_rate: omega / a1, mass_scale: a2 * a3, impulse_scale: a3, compliance: 1.0 / a2 }
     }
 }
 
@@ -231,12 +236,49 @@ impl Softness {
 struct Ends {
     a: SolverBody,
     b: SolverBody,
+    /// (v_a − v_b)·n, kept up to date by `push_normal`: the normal rows' linear part.
+    u: Scalar,
+    /// (dx_a − dx_b)·n: how far the substeps have moved the bodies along the normal.
+    d: Scalar,
+    /// Normal impulse applied to `u` and the spins but not yet to the linear velocities
+    /// (`flush`): a normal row's linear part is the same for every point of a pair, so it is
+    /// kept as one number until something else needs the velocities.
+    held: Scalar,
 }
 
 impl Ends {
+    /// The ends of constraint `c` as `bodies` stand.
     #[inline(always)]
-    fn load(bodies: &[SolverBody], c: &Constraint) -> Self {
-        Self { a: bodies[c.slot[0] as usize], b: bodies[c.slot[1] as usize] }
+    fn load(&mut self, bodies: &[SolverBody], c: &Constraint) {
+        let [ia, ib] = c.slot;
+        self.a = bodies[ia as usize];
+        self.b = bodies[ib as usize];
+        self.u = (self.a.v - self.b.v).dot(c.normal);
+        self.d = (self.a.dx - self.b.dx).dot(c.normal);
+        self.held = 0.0;
+    }
+
+    /// Applies the held normal impulse to the linear velocities.
+    #[inline(always)]
+    fn flush(&mut self, c: &Constraint) {
+        self.a.v += c.normal * (self.held * c.inv_mass[0]);
+        self.b.v -= c.normal * (self.held * c.inv_mass[1]);
+        self.held = 0.0;
+    }
+
+    /// Relative speed of A against B along the normal at a point with scaled levers `g`.
+    #[inline(always)]
+    fn normal_speed(&self, g: &[Vector; 2]) -> Scalar {
+        self.u + self.a.w.dot(g[0]) - self.b.w.dot(g[1])
+    }
+
+    /// A normal impulse `j` at a point with scaled levers `g`; `im` is m_a⁻¹ + m_b⁻¹.
+    #[inline(always)]
+    fn push_normal(&mut self, g: &[Vector; 2], im: Scalar, j: Scalar) {
+        self.a.w += g[0] * j;
+        self.b.w -= g[1] * j;
+        self.u += j * im;
+        self.held += j;
     }
 
     /// Writes the velocities back, except into the static slot (the last), which must stay
@@ -279,19 +321,21 @@ impl Ends {
 /// Loads a batch's bodies (one pair of ends per lane).
 #[inline(always)]
 fn open(bodies: &[SolverBody], batch: &Batch) -> [Ends; LANES] {
-    // Element by element into a local: building the array in a closure and returning it made
-    // the compiler copy its 768 bytes with a call to memmove per batch.
-    let mut ends = [Ends { a: SolverBody::default(), b: SolverBody::default() }; LANES];
+    // Body by body into a local: building an `Ends` and copying it in made the compiler call
+    // memcpy per lane, a tenth of the solve's time.
+    let body = SolverBody::default();
+    let mut ends = [Ends { a: body, b: body, u: 0.0, d: 0.0, held: 0.0 }; LANES];
     for l in 0..LANES {
-        ends[l] = Ends::load(bodies, &batch.lanes[l]);
+        ends[l].load(bodies, &batch.lanes[l]);
     }
     ends
 }
 
 /// Writes a batch's bodies back.
 #[inline(always)]
-fn close(bodies: &mut [SolverBody], batch: &Batch, ends: &[Ends; LANES]) {
+fn close(bodies: &mut [SolverBody], batch: &Batch, ends: &mut [Ends; LANES]) {
     for l in 0..LANES {
+        ends[l].flush(&batch.lanes[l]);
         ends[l].store(bodies, &batch.lanes[l]);
     }
 }
@@ -310,17 +354,18 @@ pub fn warm_start(bodies: &mut [SolverBody], batches: &[Batch], points: &mut [[C
         for entry in entries(batch, points).iter() {
             for l in 0..LANES {
                 let (c, p) = (&batch.lanes[l], &entry[l]);
-                ends[l].push(c.normal, &p.g, c.inv_mass, p.impulse);
+                ends[l].push_normal(&p.g, c.inv_mass[0] + c.inv_mass[1], p.impulse);
             }
         }
         for l in 0..LANES {
             let (c, e) = (&batch.lanes[l], &mut ends[l]);
+            e.flush(c);
             let f = &c.friction;
             e.push(c.tangents[0], &f.g[0], c.inv_mass, f.impulse[0]);
             e.push(c.tangents[1], &f.g[1], c.inv_mass, f.impulse[1]);
             e.twist(&f.twist, f.impulse[2]);
         }
-        close(bodies, batch, &ends);
+        close(bodies, batch, &mut ends);
     }
 }
 
@@ -356,11 +401,12 @@ pub fn sweep(
         if soft.is_none() {
             for l in 0..LANES {
                 if batch.lanes[l].mu > 0.0 {
+                    ends[l].flush(&batch.lanes[l]);
                     friction(&mut ends[l], &mut batch.lanes[l], entries, l);
                 }
             }
         }
-        close(bodies, batch, &ends);
+        close(bodies, batch, &mut ends);
     }
 }
 
@@ -388,19 +434,25 @@ fn normal_pair(
     }
 }
 
-/// What a normal row asks of its impulse this pass: the velocity bias and the compliance
-/// (see `normal_impulse`). The soft step's update Δλ = −m·s_m (u + b) − s_i λ is a
-/// Gauss–Seidel step on the compliant row u + b + C λ = 0 with C = k s_i / s_m, k = 1/m.
+/// What a normal row asks of its impulse this pass: the velocity bias and the softness,
+/// (compliance per unit of K_ii, effective-mass factor): the soft step's update
+/// Δλ = −m·s_m (u + b) − s_i λ is a Gauss–Seidel step on the compliant row u + b + C λ = 0 with
+/// C = K_ii s_i / s_m, whose diagonal K_ii + C has the inverse m·s_m (s_m + s_i = 1). A rigid
+/// row is (0, 1).
 #[inline(always)]
-fn row_target(e: &Ends, c: &Constraint, p: &ContactPoint, h: Scalar, soft: Option<Softness>) -> (Scalar, Scalar) {
+fn row_target(
+    e: &Ends,
+    c: &Constraint,
+    p: &ContactPoint,
+    h: Scalar,
+    soft: Option<Softness>,
+) -> (Scalar, Scalar, Scalar) {
     let g = &p.g;
     let gap = p.gap + (e.a.dx - e.b.dx).dot(c.normal) + e.a.dq.dot(g[0]) - e.b.dq.dot(g[1]);
     match soft {
-        _ if gap > 0.0 => (gap / h, 0.0),
-        Some(k) if gap + c.slop < 0.0 && p.mass > 0.0 => {
-            ((k.bias_rate * (gap + c.slop)).max(-c.max_push), k.impulse_scale / (k.mass_scale * p.mass))
-        }
-        _ => (0.0, 0.0),
+        _ if gap > 0.0 => (gap / h, 0.0, 1.0),
+        Some(k) if gap + c.slop < 0.0 => ((k.bias_rate * (gap + c.slop)).max(-c.max_push), k.compliance, k.mass_scale),
+        _ => (0.0, 0.0, 1.0),
     }
 }
 
@@ -423,39 +475,44 @@ fn normal_block(
         normal_impulse(e, c, q, h, soft);
         return;
     }
-    let n = c.normal;
-    let ((bp, cp), (bq, cq)) = (row_target(e, c, p, h, soft), row_target(e, c, q, h, soft));
-    let r = [e.speed(n, &p.g) + bp + cp * p.impulse, e.speed(n, &q.g) + bq + cq * q.impulse];
-    let (m00, m11, m01) = (1.0 / p.mass + cp, 1.0 / q.mass + cq, p.coupling);
+    let ((bp, sp, fp), (bq, sq, fq)) = (row_target(e, c, p, h, soft), row_target(e, c, q, h, soft));
+    let (cp, cq) = (sp * p.k, sq * q.k);
     let lambda = [p.impulse, q.impulse];
+    let r = [e.normal_speed(&p.g) + bp + cp * lambda[0], e.normal_speed(&q.g) + bq + cq * lambda[1]];
+    let (m00, m11, m01) = (p.k + cp, q.k + cq, p.coupling);
     let det = m00 * m11 - m01 * m01;
-    // Both push; only the first; only the second; neither.
-    let both = (det > 1e-12 * m00 * m11).then(|| {
-        let d = [-(m11 * r[0] - m01 * r[1]) / det, -(m00 * r[1] - m01 * r[0]) / det];
-        [lambda[0] + d[0], lambda[1] + d[1]]
-    });
-    let only_first = {
-        let l0 = lambda[0] - (r[0] - m01 * lambda[1]) / m00;
+    // Both push; else only the first; only the second; neither.
+    let both = || {
+        (det > 1e-9 * m00 * m11).then(|| {
+            let inv = 1.0 / det;
+            [lambda[0] - (m11 * r[0] - m01 * r[1]) * inv, lambda[1] - (m00 * r[1] - m01 * r[0]) * inv]
+        })
+    };
+    let only_first = || {
+        let l0 = lambda[0] - (r[0] - m01 * lambda[1]) * (p.mass * fp);
         let w1 = r[1] + m01 * (l0 - lambda[0]) - m11 * lambda[1];
         (l0 >= 0.0 && w1 >= 0.0).then_some([l0, 0.0])
     };
-    let only_second = {
-        let l1 = lambda[1] - (r[1] - m01 * lambda[0]) / m11;
+    let only_second = || {
+        let l1 = lambda[1] - (r[1] - m01 * lambda[0]) * (q.mass * fq);
         let w0 = r[0] + m01 * (l1 - lambda[1]) - m00 * lambda[0];
         (l1 >= 0.0 && w0 >= 0.0).then_some([0.0, l1])
     };
-    let neither = {
+    let neither = || {
         let w = [r[0] - m00 * lambda[0] - m01 * lambda[1], r[1] - m01 * lambda[0] - m11 * lambda[1]];
         (w[0] >= 0.0 && w[1] >= 0.0).then_some([0.0, 0.0])
     };
-    let Some(new) = both.filter(|l| l[0] >= 0.0 && l[1] >= 0.0).or(only_first).or(only_second).or(neither) else {
+    let chosen =
+        both().filter(|l| l[0] >= 0.0 && l[1] >= 0.0).or_else(only_first).or_else(only_second).or_else(neither);
+    let Some(new) = chosen else {
         // Round-off left no case exact: one Gauss–Seidel step each.
         normal_impulse(e, c, p, h, soft);
         normal_impulse(e, c, q, h, soft);
         return;
     };
-    e.push(n, &p.g, c.inv_mass, new[0] - lambda[0]);
-    e.push(n, &q.g, c.inv_mass, new[1] - lambda[1]);
+    let im = c.inv_mass[0] + c.inv_mass[1];
+    e.push_normal(&p.g, im, new[0] - lambda[0]);
+    e.push_normal(&q.g, im, new[1] - lambda[1]);
     (p.impulse, q.impulse) = (new[0], new[1]);
     p.max_impulse = p.max_impulse.max(new[0]);
     q.max_impulse = q.max_impulse.max(new[1]);
@@ -471,7 +528,7 @@ fn normal_block(
 #[inline(always)]
 fn normal_impulse(e: &mut Ends, c: &Constraint, p: &mut ContactPoint, h: Scalar, soft: Option<Softness>) {
     let g = &p.g;
-    let gap = p.gap + (e.a.dx - e.b.dx).dot(c.normal) + e.a.dq.dot(g[0]) - e.b.dq.dot(g[1]);
+    let gap = p.gap + e.d + e.a.dq.dot(g[0]) - e.b.dq.dot(g[1]);
     let (bias, mass_scale, impulse_scale) = match soft {
         _ if gap > 0.0 => (gap / h, 1.0, 0.0),
         Some(k) if gap + c.slop < 0.0 => {
@@ -479,9 +536,9 @@ fn normal_impulse(e: &mut Ends, c: &Constraint, p: &mut ContactPoint, h: Scalar,
         }
         _ => (0.0, 1.0, 0.0),
     };
-    let dj = -p.mass * mass_scale * (e.speed(c.normal, g) + bias) - impulse_scale * p.impulse;
+    let dj = -p.mass * mass_scale * (e.normal_speed(g) + bias) - impulse_scale * p.impulse;
     let jn = (p.impulse + dj).max(0.0);
-    e.push(c.normal, g, c.inv_mass, jn - p.impulse);
+    e.push_normal(g, c.inv_mass[0] + c.inv_mass[1], jn - p.impulse);
     p.impulse = jn;
     p.max_impulse = p.max_impulse.max(jn);
 }
@@ -534,13 +591,13 @@ pub fn restitution(
                 if c.restitution == 0.0 || p.approach > -threshold || p.max_impulse == 0.0 {
                     continue;
                 }
-                let dj = -p.mass * (e.speed(c.normal, &p.g) + c.restitution * p.approach);
+                let dj = -p.mass * (e.normal_speed(&p.g) + c.restitution * p.approach);
                 let jn = (p.impulse + dj).max(0.0);
-                e.push(c.normal, &p.g, c.inv_mass, jn - p.impulse);
+                e.push_normal(&p.g, c.inv_mass[0] + c.inv_mass[1], jn - p.impulse);
                 p.impulse = jn;
             }
         }
-        close(bodies, batch, &ends);
+        close(bodies, batch, &mut ends);
     }
 }
 

@@ -237,9 +237,11 @@ fn build_constraints(ctx: &mut StepContext) {
                 let near = |q: usize| (c.geometry.on_a[q] - geometry.on_a[j]).length() <= MATCH_DISTANCE * b.radius[ia];
                 if recycled { Some(j) } else { (0..c.geometry.len).find(|&q| near(q)) }.map(|q| c.normal[q])
             });
+            let k = inv_mass[0] + inv_mass[1] + g[0].length_squared() + g[1].length_squared();
             s.points[first + j][lane as usize] = ContactPoint {
                 g,
-                mass: inverse(inv_mass[0] + inv_mass[1] + g[0].length_squared() + g[1].length_squared()),
+                mass: inverse(k),
+                k,
                 impulse: old.unwrap_or(0.0),
                 gap,
                 approach,
