@@ -479,6 +479,9 @@ fn normal_block(
     let (cp, cq) = (sp * p.k, sq * q.k);
     let lambda = [p.impulse, q.impulse];
     let r = [e.normal_speed(&p.g) + bp + cp * lambda[0], e.normal_speed(&q.g) + bq + cq * lambda[1]];
+    if lambda == [0.0, 0.0] && r[0] >= 0.0 && r[1] >= 0.0 {
+        return; // apart, or touching without pushing, and staying so: the LCP's unique answer
+    }
     let (m00, m11, m01) = (p.k + cp, q.k + cq, p.coupling);
     let det = m00 * m11 - m01 * m01;
     // Both push; else only the first; only the second; neither.
