@@ -253,7 +253,7 @@ pub struct SolveScratch {
     /// The batches of independent constraints, in solving order.
     pub batches: Vec<crate::solver::Batch>,
     /// Their points, lane by lane.
-    pub points: Vec<[crate::solver::ContactPoint; crate::solver::LANES]>,
+    pub points: Vec<crate::solver::PointRows>,
     /// Each pair's contact geometry (in `pairs` order), found or recycled this step.
     pub geometry: Vec<Geometry>,
     /// Whether each pair's geometry was recycled from the previous step.

@@ -23,7 +23,7 @@ use crate::bodies::Bodies;
 use crate::contact::{Contact, Feature, Pair, PairState};
 use crate::manifold::{ClipScratch, Manifold, contact_axis, manifold, support_point};
 use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
-use crate::solver::{self, Batch, Constraint, ContactPoint, Friction, LANES, Softness, SolverBody};
+use crate::solver::{self, Batch, Constraint, ContactPoint, Friction, PointRows, Softness, SolverBody};
 use crate::step::{CachedManifold, Geometry, HeldPair, SolveScratch, StepContext};
 use hecs::World;
 use rayon::prelude::*;
@@ -191,7 +191,7 @@ fn build_constraints(ctx: &mut StepContext) {
     }));
     solver::place(&s.slots, fixed, &mut s.last, &mut s.fill, &mut s.placed);
     s.batches.clear();
-    s.batches.extend(s.fill.iter().map(|_| Batch { lanes: [Constraint::idle(fixed); LANES], first: 0, len: 0 }));
+    s.batches.extend(s.fill.iter().map(|_| Batch::idle(fixed)));
     for (&(_, k), &(batch, _)) in s.order.iter().zip(&s.placed) {
         let batch = &mut s.batches[batch as usize];
         batch.len = batch.len.max(s.manifolds[k as usize].len as u32);
@@ -202,7 +202,7 @@ fn build_constraints(ctx: &mut StepContext) {
         first += batch.len;
     }
     s.points.clear();
-    s.points.resize(first as usize, [ContactPoint::IDLE; LANES]);
+    s.points.resize(first as usize, PointRows::default());
     s.held.clear();
     // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
     // before integrating forces).
@@ -225,6 +225,7 @@ fn build_constraints(ctx: &mut StepContext) {
         s.held.push(HeldPair { pair: k, batch, lane, len: m.len as u8 });
         // The friction patch's centre: the mean of the points.
         let centre = m.points().iter().sum::<Vector>() / m.len as Scalar;
+        let mut rows = [ContactPoint::IDLE; crate::manifold::MAX_POINTS];
         for (j, (&p, &gap)) in m.points().iter().zip(&m.gaps).enumerate() {
             let r = [p - b.position[ia], p - b.position[ib]];
             let g = [scale[0] * r[0].cross(n), scale[1] * r[1].cross(n)];
@@ -238,7 +239,7 @@ fn build_constraints(ctx: &mut StepContext) {
                 if recycled { Some(j) } else { (0..c.geometry.len).find(|&q| near(q)) }.map(|q| c.normal[q])
             });
             let k = inv_mass[0] + inv_mass[1] + g[0].length_squared() + g[1].length_squared();
-            s.points[first + j][lane as usize] = ContactPoint {
+            rows[j] = ContactPoint {
                 g,
                 mass: inverse(k),
                 k,
@@ -252,25 +253,30 @@ fn build_constraints(ctx: &mut StepContext) {
         }
         // Each pair of points' coupling (`solver::ContactPoint::coupling`).
         for j in (0..m.len.saturating_sub(1)).step_by(2) {
-            let (p, q) = (&s.points[first + j][lane as usize], &s.points[first + j + 1][lane as usize]);
-            let coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
-            s.points[first + j][lane as usize].coupling = coupling;
+            let (p, q) = (&rows[j], &rows[j + 1]);
+            rows[j].coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
         }
-        into.lanes[lane as usize] = Constraint {
-            slot,
-            normal: n,
-            tangents,
-            inv_mass,
-            mu,
-            restitution: 0.5 * (b.restitution[ia] + b.restitution[ib]),
-            slop: params.slop * thin,
-            max_push: (params.max_correction * thin / dt).min(MAX_PUSH),
-            friction: if mu > 0.0 {
-                friction_patch(centre, [b.position[ia], b.position[ib]], n, tangents, inv_mass, scale, cached)
-            } else {
-                Friction::IDLE
+        for (j, row) in rows[..m.len].iter().enumerate() {
+            s.points[first + j].set(lane as usize, row);
+        }
+        into.set(
+            lane as usize,
+            &Constraint {
+                slot,
+                normal: n,
+                tangents,
+                inv_mass,
+                mu,
+                restitution: 0.5 * (b.restitution[ia] + b.restitution[ib]),
+                slop: params.slop * thin,
+                max_push: (params.max_correction * thin / dt).min(MAX_PUSH),
+                friction: if mu > 0.0 {
+                    friction_patch(centre, [b.position[ia], b.position[ib]], n, tangents, inv_mass, scale, cached)
+                } else {
+                    Friction::IDLE
+                },
             },
-        };
+        );
     }
 }
 
@@ -411,17 +417,17 @@ fn remember(ctx: &mut StepContext) {
     s.cache.clear();
     for held in &s.held {
         let pair = &s.pairs[held.pair as usize];
-        let batch = &s.batches[held.batch as usize];
-        let c = &batch.lanes[held.lane as usize];
-        let [j1, j2, jw] = c.friction.impulse;
+        let (batch, lane) = (&s.batches[held.batch as usize], usize::from(held.lane));
+        let [n, t1, t2] = batch.axes(lane);
+        let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
         let mut entry = CachedManifold {
             geometry: s.geometry[held.pair as usize],
-            tangent: c.tangents[0] * j1 + c.tangents[1] * j2,
-            twist: c.normal * jw,
+            tangent: t1 * j1 + t2 * j2,
+            twist: n * jw,
             ..CachedManifold::default()
         };
         for j in 0..usize::from(held.len) {
-            entry.normal[j] = s.points[batch.first as usize + j][held.lane as usize].impulse;
+            entry.normal[j] = s.points[batch.first as usize + j].impulse[lane];
         }
         s.cache.push(((pair.a, pair.b), entry));
         let pushed = entry.normal.iter().any(|&j| j > 0.0);

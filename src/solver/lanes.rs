@@ -1,0 +1,231 @@
+//! The solver's data laid out lane by lane (structure of arrays): each field holds one value
+//! per lane of a batch, so the kernel's arithmetic runs across the lanes with no shuffling of
+//! vector components, and the compiler can pair lanes in SIMD registers.
+
+use super::{Constraint, ContactPoint, Friction, LANES};
+use crate::math::{Scalar, Vector};
+
+/// One scalar per lane.
+pub type Lanes = [Scalar; LANES];
+
+/// One vector per lane.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Wide {
+    /// x of each lane.
+    pub x: Lanes,
+    /// y of each lane.
+    pub y: Lanes,
+    /// z of each lane.
+    pub z: Lanes,
+}
+
+impl Wide {
+    /// Zero in every lane.
+    pub const ZERO: Self = Self { x: [0.0; LANES], y: [0.0; LANES], z: [0.0; LANES] };
+
+    /// Lane `l`'s vector.
+    #[inline(always)]
+    #[must_use]
+    pub fn get(&self, l: usize) -> Vector {
+        Vector::new(self.x[l], self.y[l], self.z[l])
+    }
+
+    /// Sets lane `l`'s vector.
+    #[inline(always)]
+    pub fn set(&mut self, l: usize, v: Vector) {
+        (self.x[l], self.y[l], self.z[l]) = (v.x, v.y, v.z);
+    }
+
+    /// The dot product in each lane.
+    #[inline(always)]
+    #[must_use]
+    pub fn dot(&self, o: &Self) -> Lanes {
+        let mut out = [0.0; LANES];
+        for l in 0..LANES {
+            out[l] = self.x[l] * o.x[l] + self.y[l] * o.y[l] + self.z[l] * o.z[l];
+        }
+        out
+    }
+
+    /// `self += o · s` in each lane.
+    #[inline(always)]
+    pub fn add_scaled(&mut self, o: &Self, s: &Lanes) {
+        for l in 0..LANES {
+            self.x[l] += o.x[l] * s[l];
+            self.y[l] += o.y[l] * s[l];
+            self.z[l] += o.z[l] * s[l];
+        }
+    }
+
+    /// `self -= o · s` in each lane.
+    #[inline(always)]
+    pub fn sub_scaled(&mut self, o: &Self, s: &Lanes) {
+        for l in 0..LANES {
+            self.x[l] -= o.x[l] * s[l];
+            self.y[l] -= o.y[l] * s[l];
+            self.z[l] -= o.z[l] * s[l];
+        }
+    }
+}
+
+/// Up to `LANES` constraints that share no free body, solved together (`super::place`); their
+/// points are `points[first..first + len]`, one `PointRows` per point index. Unused lanes, and
+/// a lane's points beyond its own count, are idle: zero masses, both ends the static slot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Batch {
+    /// Solver-body slots of A (index 0) and B of each lane.
+    pub slot: [[u32; LANES]; 2],
+    /// Unit normals, from B to A.
+    pub normal: Wide,
+    /// The two tangents.
+    pub tangents: [Wide; 2],
+    /// Inverse masses of A and B [1/kg].
+    pub inv_mass: [Lanes; 2],
+    /// Their sum, the normal rows' linear part of K.
+    pub im: Lanes,
+    /// Friction coefficients.
+    pub mu: Lanes,
+    /// Restitutions.
+    pub restitution: Lanes,
+    /// Penetration left alone [m].
+    pub slop: Lanes,
+    /// Fastest push out of a penetration [m/s].
+    pub max_push: Lanes,
+    /// The friction patches.
+    pub friction: FrictionRows,
+    /// First entry of the batch's points.
+    pub first: u32,
+    /// Most points of any lane.
+    pub len: u32,
+}
+
+impl Batch {
+    /// A batch of idle lanes whose ends are the static slot.
+    #[must_use]
+    pub fn idle(static_slot: u32) -> Self {
+        let mut batch = Self {
+            slot: [[static_slot; LANES]; 2],
+            normal: Wide::ZERO,
+            tangents: [Wide::ZERO; 2],
+            inv_mass: [[0.0; LANES]; 2],
+            im: [0.0; LANES],
+            mu: [0.0; LANES],
+            restitution: [0.0; LANES],
+            slop: [0.0; LANES],
+            max_push: [0.0; LANES],
+            friction: FrictionRows::default(),
+            first: 0,
+            len: 0,
+        };
+        for l in 0..LANES {
+            batch.set(l, &Constraint::idle(static_slot));
+        }
+        batch
+    }
+
+    /// Puts constraint `c` in lane `l`.
+    pub fn set(&mut self, l: usize, c: &Constraint) {
+        (self.slot[0][l], self.slot[1][l]) = (c.slot[0], c.slot[1]);
+        self.normal.set(l, c.normal);
+        self.tangents[0].set(l, c.tangents[0]);
+        self.tangents[1].set(l, c.tangents[1]);
+        (self.inv_mass[0][l], self.inv_mass[1][l]) = (c.inv_mass[0], c.inv_mass[1]);
+        self.im[l] = c.inv_mass[0] + c.inv_mass[1];
+        self.mu[l] = c.mu;
+        self.restitution[l] = c.restitution;
+        self.slop[l] = c.slop;
+        self.max_push[l] = c.max_push;
+        self.friction.set(l, &c.friction);
+    }
+
+    /// Lane `l`'s normal and tangents.
+    #[must_use]
+    pub fn axes(&self, l: usize) -> [Vector; 3] {
+        [self.normal.get(l), self.tangents[0].get(l), self.tangents[1].get(l)]
+    }
+}
+
+/// The friction patches of a batch (see `super::Friction`), lane by lane.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrictionRows {
+    /// g of the two tangents, for A and B.
+    pub g: [[Wide; 2]; 2],
+    /// S n for A and B.
+    pub twist: [Wide; 2],
+    /// Inverse 2×2 tangent mass (xx, xy, yy).
+    pub mass: [Lanes; 3],
+    /// Twist mass.
+    pub twist_mass: Lanes,
+    /// Accumulated impulses: tangents, twist.
+    pub impulse: [Lanes; 3],
+}
+
+impl FrictionRows {
+    fn set(&mut self, l: usize, f: &Friction) {
+        for k in 0..2 {
+            self.g[k][0].set(l, f.g[k][0]);
+            self.g[k][1].set(l, f.g[k][1]);
+            self.twist[k].set(l, f.twist[k]);
+        }
+        for k in 0..3 {
+            self.mass[k][l] = f.mass[k];
+            self.impulse[k][l] = f.impulse[k];
+        }
+        self.twist_mass[l] = f.twist_mass;
+    }
+}
+
+/// One point of each lane of a batch (see `super::ContactPoint`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointRows {
+    /// g = S (r × n) for A and B.
+    pub g: [Wide; 2],
+    /// Effective masses [kg].
+    pub mass: Lanes,
+    /// Their inverses K_ii [1/kg].
+    pub k: Lanes,
+    /// Accumulated normal impulses [N·s].
+    pub impulse: Lanes,
+    /// Gaps when the step began [m].
+    pub gap: Lanes,
+    /// Relative normal speeds when the step began [m/s].
+    pub approach: Lanes,
+    /// Largest normal impulse of any substep [N·s].
+    pub max_impulse: Lanes,
+    /// Distances from the friction centre [m].
+    pub lever: Lanes,
+    /// K₀₁ with the next point, for the first of a pair [1/kg].
+    pub coupling: Lanes,
+}
+
+impl PointRows {
+    /// Puts point `p` in lane `l`.
+    pub fn set(&mut self, l: usize, p: &ContactPoint) {
+        self.g[0].set(l, p.g[0]);
+        self.g[1].set(l, p.g[1]);
+        self.mass[l] = p.mass;
+        self.k[l] = p.k;
+        self.impulse[l] = p.impulse;
+        self.gap[l] = p.gap;
+        self.approach[l] = p.approach;
+        self.max_impulse[l] = p.max_impulse;
+        self.lever[l] = p.lever;
+        self.coupling[l] = p.coupling;
+    }
+
+    /// Lane `l`'s point.
+    #[must_use]
+    pub fn get(&self, l: usize) -> ContactPoint {
+        ContactPoint {
+            g: [self.g[0].get(l), self.g[1].get(l)],
+            mass: self.mass[l],
+            k: self.k[l],
+            impulse: self.impulse[l],
+            gap: self.gap[l],
+            approach: self.approach[l],
+            max_impulse: self.max_impulse[l],
+            lever: self.lever[l],
+            coupling: self.coupling[l],
+        }
+    }
+}
