@@ -180,12 +180,35 @@ pub struct CullScratch {
     pub chunks: Vec<Vec<(u32, u32)>>,
 }
 
+/// Constraints solved together (see `SolveScratch::groups`), with their own solver-body
+/// numbering: a group's slots count from `offset`, and its static slot is the last of its
+/// range.
+#[derive(Clone, Debug, Default)]
+pub struct ConstraintGroup {
+    /// First solver body of the group's range.
+    pub offset: u32,
+    /// The group's static slot, in its own numbering.
+    pub fixed: u32,
+    /// Solver-body slots of each constraint, in the group's numbering (for `solver::place`).
+    pub slots: Vec<[u32; 2]>,
+    /// (batch, lane) of each constraint.
+    pub placed: Vec<(u32, u8)>,
+    /// Constraints per batch.
+    pub fill: Vec<u8>,
+    /// The batches of independent constraints, in solving order.
+    pub batches: Vec<crate::solver::Batch>,
+    /// Their points, lane by lane.
+    pub points: Vec<crate::solver::PointRows>,
+}
+
 /// A pair `solve` holds this step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeldPair {
     /// Index into `SolveScratch::pairs`.
     pub pair: u32,
-    /// Its batch and lane.
+    /// Its group (`SolveScratch::groups`).
+    pub group: u8,
+    /// Its batch in the group.
     pub batch: u32,
     /// Lane within the batch.
     pub lane: u8,
@@ -242,18 +265,12 @@ pub struct SolveScratch {
     pub order: Vec<(Scalar, u32)>,
     /// One entry per held pair, in solving order.
     pub held: Vec<HeldPair>,
-    /// Solver-body slots of each held pair (scratch for `solver::place`).
-    pub slots: Vec<[u32; 2]>,
-    /// (batch, lane) of each held pair.
-    pub placed: Vec<(u32, u8)>,
+    /// The constraints in three groups: those among the bodies of one side of the scene, of
+    /// the other, and across (`solve`'s `sides`). The first two are solved at once on two
+    /// threads, the third after them.
+    pub groups: [ConstraintGroup; 3],
     /// Scratch of `solver::place`.
     pub last: Vec<u32>,
-    /// Constraints per batch (scratch of `solver::place`).
-    pub fill: Vec<u8>,
-    /// The batches of independent constraints, in solving order.
-    pub batches: Vec<crate::solver::Batch>,
-    /// Their points, lane by lane.
-    pub points: Vec<crate::solver::PointRows>,
     /// Each pair's contact geometry (in `pairs` order), found or recycled this step.
     pub geometry: Vec<Geometry>,
     /// Whether each pair's geometry was recycled from the previous step.
@@ -262,8 +279,13 @@ pub struct SolveScratch {
     pub cache: Vec<((u32, u32), CachedManifold)>,
     /// The step these constraints belong to (`correct` uses them only if `solve` ran this step).
     pub step: u64,
-    /// The free bodies of the constraints, sorted, each once: solver body k is `moving[k]`.
+    /// The free bodies of the constraints, each once, in solver-body order (the static slots
+    /// between the sides and at the end skipped).
     pub moving: Vec<u32>,
+    /// Free bodies on the first side; solver body `left` is that side's static slot.
+    pub left: usize,
+    /// Scratch: each free body's coordinate along the split, with its actor index.
+    pub keys: Vec<(Scalar, u32)>,
     /// Each actor's solver-body slot (`u32::MAX` when not moving this step).
     pub slot: Vec<u32>,
     /// The solver bodies, `moving.len()` of them and then the static slot.

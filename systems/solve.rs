@@ -24,7 +24,7 @@ use crate::contact::{Contact, Feature, Pair, PairState};
 use crate::manifold::{ClipScratch, Manifold, contact_axis, manifold, support_point};
 use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
 use crate::solver::{self, Batch, Constraint, ContactPoint, Friction, PointRows, Softness, SolverBody};
-use crate::step::{CachedManifold, Geometry, HeldPair, SolveScratch, StepContext};
+use crate::step::{CachedManifold, ConstraintGroup, Geometry, HeldPair, SolveScratch, StepContext};
 use hecs::World;
 use rayon::prelude::*;
 
@@ -59,7 +59,6 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
     if s.pairs.is_empty() {
         s.cache.clear();
         s.held.clear();
-        s.batches.clear();
         return;
     }
     ctx.pose_pairs(|p| p.contact().is_some() || p.is_candidate());
@@ -183,46 +182,84 @@ fn build_constraints(ctx: &mut StepContext) {
         .extend(held.map(|(k, m)| (m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar, k as u32)));
     s.order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
     gather_bodies(b, s);
-    let fixed = s.moving.len() as u32;
-    s.slots.clear();
-    s.slots.extend(s.order.iter().map(|&(_, k)| {
-        let pair = &s.pairs[k as usize];
-        [s.slot[pair.a as usize], s.slot[pair.b as usize]]
-    }));
-    solver::place(&s.slots, fixed, &mut s.last, &mut s.fill, &mut s.placed);
-    s.batches.clear();
-    s.batches.extend(s.fill.iter().map(|_| Batch::idle(fixed)));
-    for (&(_, k), &(batch, _)) in s.order.iter().zip(&s.placed) {
-        let batch = &mut s.batches[batch as usize];
-        batch.len = batch.len.max(s.manifolds[k as usize].len as u32);
+    // Each constraint's group: within the first side, within the second, or across; then its
+    // batches, each group placed on its own.
+    let (left, last) = (s.left as u32, s.bodies.len() as u32 - 1);
+    s.groups[0].offset = 0;
+    s.groups[0].fixed = left;
+    s.groups[1].offset = left + 1;
+    s.groups[1].fixed = last - (left + 1);
+    s.groups[2].offset = 0;
+    s.groups[2].fixed = last;
+    for group in &mut s.groups {
+        group.slots.clear();
     }
-    let mut first = 0;
-    for batch in &mut s.batches {
-        batch.first = first;
-        first += batch.len;
-    }
-    s.points.clear();
-    s.points.resize(first as usize, PointRows::default());
     s.held.clear();
+    for &(_, k) in &s.order {
+        let pair = &s.pairs[k as usize];
+        let slot = [s.slot[pair.a as usize], s.slot[pair.b as usize]];
+        let side = |i: u32| if i == left || i == last { None } else { Some(i > left) };
+        let group = match (side(slot[0]), side(slot[1])) {
+            (Some(true), Some(true) | None) | (None, Some(true)) => 1,
+            (Some(false), Some(false) | None) | (None, Some(false)) | (None, None) => 0,
+            _ => 2,
+        };
+        let g = &mut s.groups[group];
+        let local = |i: u32| if i == left || i == last { g.fixed } else { i - g.offset };
+        let slot = [local(slot[0]), local(slot[1])];
+        g.slots.push(slot);
+        s.held.push(HeldPair {
+            pair: k,
+            group: group as u8,
+            batch: 0,
+            lane: 0,
+            len: s.manifolds[k as usize].len as u8,
+        });
+    }
+    for group in &mut s.groups {
+        solver::place(&group.slots, group.fixed, &mut s.last, &mut group.fill, &mut group.placed);
+        group.batches.clear();
+        group.batches.extend(group.fill.iter().map(|_| Batch::idle(group.fixed)));
+    }
+    let mut next = [0_usize; 3];
+    for held in &mut s.held {
+        let g = &mut s.groups[usize::from(held.group)];
+        (held.batch, held.lane) = g.placed[next[usize::from(held.group)]];
+        next[usize::from(held.group)] += 1;
+        let batch = &mut g.batches[held.batch as usize];
+        batch.len = batch.len.max(u32::from(held.len));
+    }
+    for group in &mut s.groups {
+        let mut first = 0;
+        for batch in &mut group.batches {
+            batch.first = first;
+            first += batch.len;
+        }
+        group.points.clear();
+        group.points.resize(first as usize, PointRows::default());
+    }
     // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
     // before integrating forces).
     let before = |i: usize| b.velocity[i] - if b.is_fixed(i) { Vector::ZERO } else { params.gravity * dt };
-    for (&(_, k), &(batch, lane)) in s.order.iter().zip(&s.placed) {
+    for held in &s.held {
+        let (k, lane) = (held.pair, held.lane);
         let (pair, m) = (&s.pairs[k as usize], &s.manifolds[k as usize]);
         let contact = pair.contact().expect("ordered pairs have contacts");
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let n = contact.normal;
         let tangents = tangents(n);
         let thin = b.thinner(&ctx.meshes, ia, ib);
-        let slot = [s.slot[ia], s.slot[ib]];
-        let scale = [s.scale[slot[0] as usize], s.scale[slot[1] as usize]];
+        let global = [s.slot[ia], s.slot[ib]];
+        let scale = [s.scale[global[0] as usize], s.scale[global[1] as usize]];
+        let group = &mut s.groups[usize::from(held.group)];
+        let (left, last) = (s.left as u32, s.bodies.len() as u32 - 1);
+        let slot = global.map(|i| if i == left || i == last { group.fixed } else { i - group.offset });
         let inv_mass = [b.inv_mass[ia], b.inv_mass[ib]];
         let cached = s.cache.binary_search_by_key(&(pair.a, pair.b), |e| e.0).ok().map(|i| &s.cache[i].1);
         let mu = b.pair_friction(ia, ib);
         let (geometry, recycled) = (&s.geometry[k as usize], s.recycled[k as usize]);
-        let into = &mut s.batches[batch as usize];
+        let into = &mut group.batches[held.batch as usize];
         let first = into.first as usize;
-        s.held.push(HeldPair { pair: k, batch, lane, len: m.len as u8 });
         // The friction patch's centre: the mean of the points.
         let centre = m.points().iter().sum::<Vector>() / m.len as Scalar;
         let mut rows = [ContactPoint::IDLE; crate::manifold::MAX_POINTS];
@@ -245,7 +282,9 @@ fn build_constraints(ctx: &mut StepContext) {
                 k,
                 impulse: old.unwrap_or(0.0),
                 gap,
-                approach,
+                // Only a new point bounces (rapier's rule): one held since last step is resting
+                // or rocking on it, and bouncing there keeps a settling pile astir.
+                approach: if old.is_some() { 0.0 } else { approach },
                 max_impulse: 0.0,
                 lever: (p - centre).length(),
                 coupling: 0.0,
@@ -257,7 +296,7 @@ fn build_constraints(ctx: &mut StepContext) {
             rows[j].coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
         }
         for (j, row) in rows[..m.len].iter().enumerate() {
-            s.points[first + j].set(lane as usize, row);
+            group.points[first + j].set(lane as usize, row);
         }
         into.set(
             lane as usize,
@@ -316,9 +355,17 @@ fn friction_patch(
     }
 }
 
-/// Gives each free body of the held pairs a solver body (in actor order), every fixed body the
-/// static slot after them, and computes each one's S = (I⁻¹)^½ in world axes:
-/// S = R diag(1/√I_p) Rᵀ with R the principal frame in world axes.
+/// Constraints below this many are solved as one group: splitting costs more than it saves.
+const SPLIT_MIN: usize = 256;
+
+/// Gives each free body of the held pairs a solver body and computes each one's
+/// S = (I⁻¹)^½ in world axes, S = R diag(1/√I_p) Rᵀ with R the principal frame in world axes.
+///
+/// The free bodies are split in two sides at their median along the horizontal axis of
+/// widest spread (a scene with fewer than `SPLIT_MIN` constraints stays on one side); solver
+/// bodies are the first side's, its static slot, the second side's, and the last static slot.
+/// Every fixed body maps to a static slot. The split depends on the scene only, never on the
+/// thread count, so runs are the same on one thread or two.
 fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
     for &i in &s.moving {
         s.slot[i as usize] = u32::MAX;
@@ -329,29 +376,57 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
     s.moving.extend(ends.filter(|&i| !b.is_fixed(i as usize)));
     s.moving.sort_unstable();
     s.moving.dedup();
-    let fixed = s.moving.len() as u32;
+    s.left = s.moving.len();
+    if s.order.len() >= SPLIT_MIN {
+        // The horizontal axis (across gravity) along which the bodies spread widest.
+        let spread = |axis: Vector| {
+            let along = s.moving.iter().map(|&i| b.position[i as usize].dot(axis));
+            let (lo, hi) = along.fold((Scalar::INFINITY, Scalar::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+            hi - lo
+        };
+        let axis = if spread(Vector::X) >= spread(Vector::Z) { Vector::X } else { Vector::Z };
+        s.keys.clear();
+        s.keys.extend(s.moving.iter().map(|&i| (b.position[i as usize].dot(axis), i)));
+        s.keys.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        s.moving.clear();
+        s.moving.extend(s.keys.iter().map(|k| k.1));
+        s.left = s.moving.len() / 2;
+    }
+    let (left, last) = (s.left as u32, s.moving.len() as u32 + 1);
     for (k, &i) in s.moving.iter().enumerate() {
-        s.slot[i as usize] = k as u32;
+        s.slot[i as usize] = if (k as u32) < left { k as u32 } else { k as u32 + 1 };
     }
     for pair in &s.pairs {
         for i in [pair.a, pair.b] {
             if b.is_fixed(i as usize) {
-                s.slot[i as usize] = fixed;
+                s.slot[i as usize] = last;
             }
         }
     }
-    s.scale.clear();
-    s.scale.extend(s.moving.iter().map(|&i| {
-        let i = i as usize;
+    let scale = |i: usize| {
         let r = Mat3::from_quat(b.orientation[i] * b.principal_axes[i]);
         r * Mat3::from_diagonal(b.principal_moments[i].map(|m| 1.0 / m.sqrt())) * r.transpose()
-    }));
-    s.scale.push(Mat3::ZERO);
+    };
+    s.scale.clear();
     s.bodies.clear();
-    s.bodies.extend(s.moving.iter().zip(&s.scale).map(|(&i, scale)| {
-        let i = i as usize;
-        SolverBody { v: b.velocity[i], w: scale.inverse() * b.angular_velocity[i], ..SolverBody::default() }
-    }));
+    for (k, &i) in s.moving.iter().enumerate() {
+        if k == s.left {
+            s.scale.push(Mat3::ZERO);
+            s.bodies.push(SolverBody::default());
+        }
+        let (i, scale) = (i as usize, scale(i as usize));
+        s.bodies.push(SolverBody {
+            v: b.velocity[i],
+            w: scale.inverse() * b.angular_velocity[i],
+            ..SolverBody::default()
+        });
+        s.scale.push(scale);
+    }
+    if s.left == s.moving.len() {
+        s.scale.push(Mat3::ZERO);
+        s.bodies.push(SolverBody::default());
+    }
+    s.scale.push(Mat3::ZERO);
     s.bodies.push(SolverBody::default());
 }
 
@@ -377,28 +452,31 @@ fn substeps(ctx: &mut StepContext) {
     let h = dt / Scalar::from(count);
     let soft = Softness::new(h);
     let s = &mut ctx.scratch.solve;
-    let free = s.moving.len();
     let (g_step, g_sub) = (params.gravity * dt, params.gravity * h);
-    for body in &mut s.bodies[..free] {
+    let statics = [s.left, s.bodies.len() - 1];
+    let free = |k: usize| !statics.contains(&k);
+    for (_, body) in s.bodies.iter_mut().enumerate().filter(|(k, _)| free(*k)) {
         body.v -= g_step;
     }
     for _ in 0..count {
-        for body in &mut s.bodies[..free] {
+        for (_, body) in s.bodies.iter_mut().enumerate().filter(|(k, _)| free(*k)) {
             body.v += g_sub;
         }
-        solver::warm_start(&mut s.bodies, &s.batches, &mut s.points);
+        each_group(s, |bodies, g| solver::warm_start(bodies, &g.batches, &mut g.points));
         for _ in 0..params.iterations {
-            solver::sweep(&mut s.bodies, &mut s.batches, &mut s.points, h, Some(soft));
+            each_group(s, |bodies, g| solver::sweep(bodies, &mut g.batches, &mut g.points, h, Some(soft)));
         }
-        for body in &mut s.bodies[..free] {
+        for (_, body) in s.bodies.iter_mut().enumerate().filter(|(k, _)| free(*k)) {
             body.dx += body.v * h;
             body.dq += body.w * h;
         }
-        solver::sweep(&mut s.bodies, &mut s.batches, &mut s.points, h, None);
+        each_group(s, |bodies, g| solver::sweep(bodies, &mut g.batches, &mut g.points, h, None));
     }
-    solver::restitution(&mut s.bodies, &s.batches, &mut s.points, params.restitution_threshold(dt));
+    let threshold = params.restitution_threshold(dt);
+    each_group(s, |bodies, g| solver::restitution(bodies, &g.batches, &mut g.points, threshold));
     let b = &mut ctx.bodies;
-    for ((&i, body), scale) in s.moving.iter().zip(&s.bodies).zip(&s.scale) {
+    let bodies = s.bodies.iter().zip(&s.scale).enumerate().filter(|(k, _)| free(*k));
+    for (&i, (_, (body, scale))) in s.moving.iter().zip(bodies) {
         let i = i as usize;
         b.velocity[i] = body.v;
         b.angular_velocity[i] = *scale * body.w;
@@ -410,6 +488,22 @@ fn substeps(ctx: &mut StepContext) {
     }
 }
 
+/// Runs `pass` over the constraint groups: the two sides at once (on two threads when rayon
+/// has them; they share no free body, and each side's solver bodies are a slice of their own),
+/// then the constraints across.
+fn each_group(s: &mut SolveScratch, pass: impl Fn(&mut [SolverBody], &mut ConstraintGroup) + Sync) {
+    let [first, second, across] = &mut s.groups;
+    let (left, right) = s.bodies.split_at_mut(s.left + 1);
+    if second.batches.is_empty() {
+        pass(left, first);
+    } else {
+        rayon::join(|| pass(left, first), || pass(right, second));
+    }
+    if !across.batches.is_empty() {
+        pass(&mut s.bodies, across);
+    }
+}
+
 /// Keeps this step's geometry and impulses for the next step, and counts one impulse per pair
 /// held (by the feature that found its contact; near pairs no test found are not counted).
 fn remember(ctx: &mut StepContext) {
@@ -417,7 +511,8 @@ fn remember(ctx: &mut StepContext) {
     s.cache.clear();
     for held in &s.held {
         let pair = &s.pairs[held.pair as usize];
-        let (batch, lane) = (&s.batches[held.batch as usize], usize::from(held.lane));
+        let group = &s.groups[usize::from(held.group)];
+        let (batch, lane) = (&group.batches[held.batch as usize], usize::from(held.lane));
         let [n, t1, t2] = batch.axes(lane);
         let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
         let mut entry = CachedManifold {
@@ -427,7 +522,7 @@ fn remember(ctx: &mut StepContext) {
             ..CachedManifold::default()
         };
         for j in 0..usize::from(held.len) {
-            entry.normal[j] = s.points[batch.first as usize + j].impulse[lane];
+            entry.normal[j] = group.points[batch.first as usize + j].impulse[lane];
         }
         s.cache.push(((pair.a, pair.b), entry));
         let pushed = entry.normal.iter().any(|&j| j > 0.0);
