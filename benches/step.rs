@@ -1,4 +1,5 @@
-//! A full box-gas step (BENCHMARKS.md scene) against actor count.
+//! A full step against actor count: box-gas (BENCHMARKS.md, no gravity, every pair colliding)
+//! and a resting pyramid (gravity, friction: the contact solver's cost).
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
@@ -14,5 +15,18 @@ fn step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, step);
+/// A resting pyramid (BENCHMARKS.md) after it has settled: the contact solver's steady cost.
+fn pyramid(c: &mut Criterion) {
+    let mut group = c.benchmark_group("step/pyramid");
+    group.sample_size(10);
+    for base in [10_u32, 20, 40] {
+        let mut sim = rigid_sandbox::bench::scene_sim(rigid_sandbox::bench::BenchScene::Pyramid, base, 1);
+        sim.run(60).expect("finite"); // settled
+        group.throughput(Throughput::Elements(u64::from(base * (base + 1) / 2)));
+        group.bench_function(BenchmarkId::from_parameter(base), |b| b.iter(|| sim.step().expect("finite")));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, step, pyramid);
 criterion_main!(benches);

@@ -44,3 +44,19 @@ const PINNED_BOX_GAS_HASH: u64 = 0xe092_b1a9_fff7_a94c;
 fn box_gas_hash_is_pinned() {
     assert_eq!(hash_with_threads(2, 120), PINNED_BOX_GAS_HASH, "got {:#018x}", hash_with_threads(2, 120));
 }
+
+#[test]
+fn a_pyramid_solved_in_two_sides_is_bit_identical_on_one_thread_or_two() {
+    // 20 rows: 590 constraints, enough for `solve` to split them in two sides and solve both
+    // at once; the split follows the scene, never the thread count.
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        pool.install(|| {
+            let mut sim = rigid_sandbox::bench::scene_sim(rigid_sandbox::bench::BenchScene::Pyramid, 20, 1);
+            sim.run(40).expect("finite");
+            assert!(!sim.ctx.scratch.solve.groups[1].batches.is_empty(), "split in two sides");
+            state_hash(&sim.actors())
+        })
+    };
+    assert_eq!(run(1), run(2));
+}

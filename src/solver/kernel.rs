@@ -398,22 +398,55 @@ fn friction(e: &mut Ends, batch: &mut Batch, entries: &[PointRows]) {
 /// Restitution after the substeps (Box2D v3): a point that touched and was approaching faster
 /// than `threshold` [m/s] when the step began leaves at `restitution` times that speed, by an
 /// added normal impulse (accumulated, never pulling). Slower contacts rest: they do not hop.
+/// A manifold's diagonals are solved as blocks here too, so a box landing flat leaves flat.
 pub fn restitution(bodies: &mut [SolverBody], batches: &[Batch], points: &mut [PointRows], threshold: Scalar) {
     for batch in batches {
         let mut e = Ends::open(bodies, batch);
-        for p in entries(batch, points).iter_mut() {
-            let u = e.normal_speed(&p.g);
-            let mut dj = [0.0; LANES];
-            for l in 0..LANES {
-                let e_l = batch.restitution[l];
-                if e_l == 0.0 || p.approach[l] > -threshold || p.max_impulse[l] == 0.0 {
-                    continue;
+        for pair in entries(batch, points).chunks_mut(2) {
+            // A bouncing row: rigid, its target the reversed approach; `None` if it rests.
+            let row = |r: &PointRows, l: usize| {
+                let bounce = batch.restitution[l] > 0.0 && r.approach[l] <= -threshold && r.max_impulse[l] > 0.0;
+                bounce.then(|| Row {
+                    mass: r.mass[l],
+                    k: r.k[l],
+                    impulse: r.impulse[l],
+                    bias: batch.restitution[l] * r.approach[l],
+                    mass_scale: 1.0,
+                    impulse_scale: 0.0,
+                    compliance: 0.0,
+                })
+            };
+            match pair {
+                [p, q] => {
+                    let (u, v) = (e.normal_speed(&p.g), e.normal_speed(&q.g));
+                    let (mut dp, mut dq) = ([0.0; LANES], [0.0; LANES]);
+                    for l in 0..LANES {
+                        let (new_p, new_q) = match (row(p, l), row(q, l)) {
+                            (Some(rp), Some(rq)) => block(rp, rq, u[l], v[l], p.coupling[l]),
+                            (Some(rp), None) => (rp.single(u[l]), q.impulse[l]),
+                            (None, Some(rq)) => (p.impulse[l], rq.single(v[l])),
+                            (None, None) => (p.impulse[l], q.impulse[l]),
+                        };
+                        (dp[l], dq[l]) = (new_p - p.impulse[l], new_q - q.impulse[l]);
+                        (p.impulse[l], q.impulse[l]) = (new_p, new_q);
+                    }
+                    e.push_normal(&p.g, &batch.im, &dp);
+                    e.push_normal(&q.g, &batch.im, &dq);
                 }
-                let jn = (p.impulse[l] - p.mass[l] * (u[l] + e_l * p.approach[l])).max(0.0);
-                dj[l] = jn - p.impulse[l];
-                p.impulse[l] = jn;
+                [p] => {
+                    let u = e.normal_speed(&p.g);
+                    let mut dp = [0.0; LANES];
+                    for l in 0..LANES {
+                        if let Some(rp) = row(p, l) {
+                            let new = rp.single(u[l]);
+                            dp[l] = new - p.impulse[l];
+                            p.impulse[l] = new;
+                        }
+                    }
+                    e.push_normal(&p.g, &batch.im, &dp);
+                }
+                _ => {}
             }
-            e.push_normal(&p.g, &batch.im, &dj);
         }
         e.close(bodies, batch);
     }
