@@ -60,6 +60,10 @@ pub enum PairState {
     /// A pruning system proved the bodies apart: no test can fire (`prune` marks these, then
     /// drops them from the list).
     Separated,
+    /// A pruning system proved the bodies apart by more than the tests' tolerance, but by less
+    /// than the contact margin: no test can fire, so they are not run, and `solve` may still
+    /// hold the pair speculatively (a gap that may close within the step).
+    Near,
     /// A detection test found this contact.
     Found(Contact),
     /// `resolve` has processed this contact (impulse applied if the bodies approached).
@@ -89,6 +93,12 @@ impl Pair {
     #[must_use]
     pub fn is_candidate(&self) -> bool {
         matches!(self.state, PairState::Candidate)
+    }
+
+    /// True when proved apart but within the contact margin (`PairState::Near`).
+    #[must_use]
+    pub fn is_near(&self) -> bool {
+        matches!(self.state, PairState::Near)
     }
 
     /// The contact, once found.

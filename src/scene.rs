@@ -90,9 +90,9 @@ pub struct SolverDef {
     pub correction: Scalar,
     /// Penetration left alone, fraction of the thinner body, 0..=1 (default 0.0005).
     pub slop: Scalar,
-    /// Substeps of the resting-contact solver `solve`, 1..=64 (default 8).
+    /// Substeps of the contact solver `solve`, 1..=64 (default 4).
     pub substeps: u32,
-    /// Solver sweeps per substep of `solve`, 1..=1000 (default 1).
+    /// Solve sweeps per substep of `solve` (a relax sweep follows them), 1..=1000 (default 2).
     pub iterations: u32,
     /// Still bodies sleep until touched in motion (the `sleep` system; default false).
     pub sleep: bool,

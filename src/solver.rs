@@ -193,12 +193,13 @@ pub fn place(slots: &[[u32; 2]], static_slot: u32, last: &mut Vec<u32>, fill: &m
 const CONTACT_DAMPING_RATIO: Scalar = 10.0;
 
 /// Natural frequency of the contact spring as a fraction of the substep rate: a quarter,
-/// Box2D v3's bound for a stable spring (120 Hz at 8 substeps of a 1/60 s step). Box2D and
+/// Box2D v3's bound for a stable spring (60 Hz at 4 substeps of a 1/60 s step). Box2D and
 /// rapier default to 30 Hz (60 against fixed bodies), which lets a tall stack buckle: a tower
-/// of 20 cubes on 30 Hz contacts, or a 40-row pyramid's out-of-plane lean on 60 Hz ones, has
-/// less bending stiffness than its weight's toppling moment, and falls. A soft contact also
-/// sinks under load by (load)/(effective mass · ω²): the stiffest stable spring keeps a 40-row
-/// pyramid's bottom row within a few millimetres.
+/// of 20 cubes on 30 Hz contacts, or a 40-row pyramid's out-of-plane lean, has less bending
+/// stiffness than its weight's toppling moment, and falls. A soft contact also sinks under
+/// load by (load)/(effective mass · ω²): the stiffest stable spring keeps a tower of ten
+/// within 7 mm of its height. (At this stiffness one solve sweep a substep leaves a 40-row
+/// pyramid bouncing; `Params::iterations` is 2.)
 const HERTZ_PER_SUBSTEP_RATE: Scalar = 0.25;
 
 /// The soft-constraint coefficients of a contact (Catto, "Solver2D", 2024): a damped spring

@@ -26,12 +26,13 @@ pub struct Params {
     /// Largest correction per step, as a fraction of the thinner body's thickness: a wrong
     /// normal must not throw a body across the scene (§2.6).
     pub max_correction: Scalar,
-    /// Approach speed [m/s] above which a contact is an impact that bounces (`resolve`); below
-    /// it the contact rests (`solve`). `None`: 2|g|·dt, the speed gravity alone gives in two
-    /// steps, so resting bodies never hop, and zero without gravity.
+    /// Approach speed [m/s] above which a contact bounces (in `solve`, or `resolve` where
+    /// `solve` is idle); below it the contact rests. `None`: 2|g|·dt, the speed gravity alone
+    /// gives in two steps, so resting bodies never hop, and zero without gravity.
     pub restitution_threshold: Option<Scalar>,
-    /// Substeps of the resting-contact solver (`solve`): each adds its share of gravity, solves
-    /// and relaxes, so a tall stack's weight is carried in small pieces.
+    /// Substeps of the contact solver (`solve`): each adds its share of gravity, solves and
+    /// relaxes, so a tall stack's weight is carried in small pieces; the contacts' stiffness is
+    /// a quarter of the substep rate.
     pub substeps: u32,
     /// Solver sweeps per substep of `solve` (one relax sweep follows them).
     pub iterations: u32,

@@ -104,17 +104,18 @@ pub fn boxes_separated(a: &BoxPose, b: &BoxPose, margin: Scalar) -> bool {
     false
 }
 
-/// The margin a pair must be apart by to be dropped [m]: the proof margin, widened to the
-/// contact margin for pairs that may rest on each other, so `solve` still sees them while
-/// apart by less (a micro-bounce must not lose a stack's contact).
-fn pair_margin(p: &Pair, b: &Bodies, meshes: &MeshTable, params: &Params, dt: Scalar) -> Scalar {
+/// The margin a pair must be apart by to be dropped [m], and the proof margin: the first is
+/// the proof margin widened to the contact margin for pairs that may rest on each other, so
+/// `solve` still sees them while apart by less (a micro-bounce must not lose a stack's
+/// contact); apart by more than the second, no detection test can fire (`separated`).
+fn pair_margin(p: &Pair, b: &Bodies, meshes: &MeshTable, params: &Params, dt: Scalar) -> (Scalar, Scalar) {
     let (ia, ib) = (p.a as usize, p.b as usize);
     let proof = PRUNE_MARGIN * (b.radius[ia] + b.radius[ib]);
     if params.resting_contacts(dt, b.pair_friction(ia, ib)) {
         let speculative = params.speculative_distance(dt, b, ia) + params.speculative_distance(dt, b, ib);
-        proof.max(params.contact_margin * b.thinner(meshes, ia, ib) + speculative)
+        (proof.max(params.contact_margin * b.thinner(meshes, ia, ib) + speculative), proof)
     } else {
-        proof
+        (proof, proof)
     }
 }
 
@@ -126,13 +127,16 @@ fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
     })
 }
 
-/// Drops the candidate pairs proved apart, so later systems walk only pairs that may touch
+/// Drops the candidate pairs proved apart, and marks `Near` those proved apart by less than
+/// the contact margin (kept for `solve`, skipped by the tests), so later systems walk only
+/// pairs that may touch
 /// (at 64 000 box-gas cubes: 2 400 of 267 000 sphere candidates). The broad phase's count stays
 /// in `ctx.stats.candidates`. Box–box pairs are tested from their poses (`boxes_separated`)
 /// before anything is posed; the rest by `separated` on posed meshes.
 ///
 /// - Reads: `ctx.pairs` (`Candidate` only), `ctx.bodies`, `ctx.meshes`, `ctx.posed`.
-/// - Writes: `ctx.pairs` (removes separated pairs, keeps order), `ctx.posed`.
+/// - Writes: `ctx.pairs` (removes separated pairs, keeps order; `Candidate` → `Near`),
+///   `ctx.posed`.
 /// - Paper: none (an early-out before the detection tests of "Collision Detection").
 /// - Cost: O(1) per box pair; otherwise O(V_A + V_B) per axis tried, at most
 ///   1 + P_A + P_B + 64 axes per pair, with early exits.
@@ -148,10 +152,13 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         })
     };
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate()).for_each(|pair| {
-        if let (Some(ba), Some(bb)) = (as_box(pair.a), as_box(pair.b))
-            && boxes_separated(&ba, &bb, margin(pair))
-        {
-            pair.state = PairState::Separated;
+        if let (Some(ba), Some(bb)) = (as_box(pair.a), as_box(pair.b)) {
+            let (wide, proof) = margin(pair);
+            if boxes_separated(&ba, &bb, wide) {
+                pair.state = PairState::Separated;
+            } else if wide > proof && boxes_separated(&ba, &bb, proof) {
+                pair.state = PairState::Near;
+            }
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
@@ -160,8 +167,11 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let margin = |p: &Pair| pair_margin(p, b, meshes, params, dt);
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|pair| {
-        if separated(posed.get(pair.a), posed.get(pair.b), margin(pair)) {
+        let ((pa, pb), (wide, proof)) = ((posed.get(pair.a), posed.get(pair.b)), margin(pair));
+        if separated(pa, pb, wide) {
             pair.state = PairState::Separated;
+        } else if wide > proof && separated(pa, pb, proof) {
+            pair.state = PairState::Near;
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);

@@ -55,13 +55,14 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
     let s = &mut ctx.scratch.solve;
     s.step = ctx.step;
     s.pairs.clear();
-    s.pairs.extend(ctx.pairs.iter().filter(|p| (p.contact().is_some() || p.is_candidate()) && resting(p)).copied());
+    let open = |p: &Pair| p.contact().is_some() || p.is_candidate() || p.is_near();
+    s.pairs.extend(ctx.pairs.iter().filter(|p| open(p) && resting(p)).copied());
     if s.pairs.is_empty() {
         s.cache.clear();
         s.held.clear();
         return;
     }
-    ctx.pose_pairs(|p| p.contact().is_some() || p.is_candidate());
+    ctx.pose_pairs(open);
     find_manifolds(ctx);
     build_constraints(ctx);
     substeps(ctx);
@@ -81,7 +82,7 @@ fn find_manifolds(ctx: &mut StepContext) {
     s.geometry.resize(n, Geometry::default());
     s.recycled.resize(n, false);
     s.near.clear();
-    s.near.extend(s.pairs.iter().map(Pair::is_candidate));
+    s.near.extend(s.pairs.iter().map(|p| p.is_candidate() || p.is_near()));
     let cache = &s.cache;
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
     let rows = rows.zip(s.geometry.par_iter_mut().zip(s.recycled.par_iter_mut()));
