@@ -11,11 +11,9 @@ use crate::math::Scalar;
 struct Ends {
     va: Wide,
     wa: Wide,
-    dxa: Wide,
     dqa: Wide,
     vb: Wide,
     wb: Wide,
-    dxb: Wide,
     dqb: Wide,
     /// (v_a − v_b)·n, kept up to date by `push_normal`: the normal rows' linear part.
     u: Lanes,
@@ -28,35 +26,26 @@ struct Ends {
 }
 
 impl Ends {
-    /// Loads the bodies of a batch's lanes.
+    /// Loads the bodies of a batch's lanes: their velocities, and with `MOTION` how far the
+    /// substeps have moved them (which only the passes that read gaps need).
     #[inline(always)]
-    fn open(bodies: &[SolverBody], batch: &Batch) -> Self {
+    fn open<const MOTION: bool>(bodies: &[SolverBody], batch: &Batch) -> Self {
         let z = Wide::ZERO;
-        let mut e = Self {
-            va: z,
-            wa: z,
-            dxa: z,
-            dqa: z,
-            vb: z,
-            wb: z,
-            dxb: z,
-            dqb: z,
-            u: [0.0; LANES],
-            d: [0.0; LANES],
-            held: [0.0; LANES],
-        };
+        let mut e =
+            Self { va: z, wa: z, dqa: z, vb: z, wb: z, dqb: z, u: [0.0; LANES], d: [0.0; LANES], held: [0.0; LANES] };
         for l in 0..LANES {
             let (a, b) = (&bodies[batch.slot[0][l] as usize], &bodies[batch.slot[1][l] as usize]);
             let n = batch.normal.get(l);
-            (e.u[l], e.d[l]) = ((a.v - b.v).dot(n), (a.dx - b.dx).dot(n));
+            e.u[l] = (a.v - b.v).dot(n);
             e.va.set(l, a.v);
             e.wa.set(l, a.w);
-            e.dxa.set(l, a.dx);
-            e.dqa.set(l, a.dq);
             e.vb.set(l, b.v);
             e.wb.set(l, b.w);
-            e.dxb.set(l, b.dx);
-            e.dqb.set(l, b.dq);
+            if MOTION {
+                e.d[l] = (a.dx - b.dx).dot(n);
+                e.dqa.set(l, a.dq);
+                e.dqb.set(l, b.dq);
+            }
         }
         e
     }
@@ -148,7 +137,7 @@ fn entries<'a>(batch: &Batch, points: &'a mut [PointRows]) -> &'a mut [PointRows
 /// at the first substep): a resting stack starts each substep near its solution.
 pub fn warm_start(bodies: &mut [SolverBody], batches: &[Batch], points: &mut [PointRows]) {
     for batch in batches {
-        let mut e = Ends::open(bodies, batch);
+        let mut e = Ends::open::<false>(bodies, batch);
         for p in entries(batch, points).iter() {
             e.push_normal(&p.g, &batch.im, &p.impulse);
         }
@@ -178,7 +167,7 @@ pub fn sweep(
     soft: Option<Softness>,
 ) {
     for batch in batches {
-        let mut e = Ends::open(bodies, batch);
+        let mut e = Ends::open::<true>(bodies, batch);
         let entries = entries(batch, points);
         // Points go in pairs (0, 1), (2, 3): a manifold's diagonals (`manifold::reduce`).
         if soft.is_none() {
@@ -359,11 +348,8 @@ fn friction(e: &mut Ends, batch: &mut Batch, entries: &[PointRows]) {
         dv
     };
     let f = &mut batch.friction;
-    let speed = |k: usize, e: &Ends| {
-        let (lin, ga, gb) = (dv.dot(&batch.tangents[k]), e.wa.dot(&f.g[k][0]), e.wb.dot(&f.g[k][1]));
-        std::array::from_fn::<Scalar, LANES, _>(|l| lin[l] + ga[l] - gb[l])
-    };
-    let (s1, s2) = (speed(0, e), speed(1, e));
+    let (s1, s2) =
+        (tangent_speed(&dv, e, &batch.tangents[0], &f.g[0]), tangent_speed(&dv, e, &batch.tangents[1], &f.g[1]));
     let (mut d1, mut d2) = ([0.0; LANES], [0.0; LANES]);
     for l in 0..LANES {
         let [m11, m12, m22] = [f.mass[0][l], f.mass[1][l], f.mass[2][l]];
@@ -395,13 +381,25 @@ fn friction(e: &mut Ends, batch: &mut Batch, entries: &[PointRows]) {
     e.wb.sub_scaled(&f.twist[1], &dt);
 }
 
+/// Relative speeds along tangents `t` at the friction centres (levers `g`), `dv` being
+/// v_a − v_b.
+#[inline(always)]
+fn tangent_speed(dv: &Wide, e: &Ends, t: &Wide, g: &[Wide; 2]) -> Lanes {
+    let (lin, ga, gb) = (dv.dot(t), e.wa.dot(&g[0]), e.wb.dot(&g[1]));
+    let mut out = [0.0; LANES];
+    for l in 0..LANES {
+        out[l] = lin[l] + ga[l] - gb[l];
+    }
+    out
+}
+
 /// Restitution after the substeps (Box2D v3): a point that touched and was approaching faster
 /// than `threshold` [m/s] when the step began leaves at `restitution` times that speed, by an
 /// added normal impulse (accumulated, never pulling). Slower contacts rest: they do not hop.
 /// A manifold's diagonals are solved as blocks here too, so a box landing flat leaves flat.
 pub fn restitution(bodies: &mut [SolverBody], batches: &[Batch], points: &mut [PointRows], threshold: Scalar) {
     for batch in batches {
-        let mut e = Ends::open(bodies, batch);
+        let mut e = Ends::open::<false>(bodies, batch);
         for pair in entries(batch, points).chunks_mut(2) {
             // A bouncing row: rigid, its target the reversed approach; `None` if it rests.
             let row = |r: &PointRows, l: usize| {
