@@ -9,8 +9,9 @@
 //! 2. `prune` — candidates a separating axis proves apart are dropped (an early-out);
 //! 3. `face`, 4. `vertex`, 5. `edge` — the paper's three detection tests, first hit wins;
 //! 6. `gravity` — external forces change velocities;
-//! 7. `resolve` — the corrected impulse on each impact;
-//! 8. `solve` — resting contact and friction (idle without gravity and friction);
+//! 7. `resolve` — the corrected impulse on each impact (the paper's model: no gravity, no
+//!    friction);
+//! 8. `solve` — resting contact, friction and impacts under gravity (idle without either);
 //! 9. `correct` — positional correction of penetration;
 //! 10. `integrate` — poses advance.
 //!

@@ -9,9 +9,10 @@
 //! 4. `vertex` — vertices inside the other body (§1.4, E5).
 //! 5. `edge` — edges crossing the other body (§1.5, E4). First hit wins per pair (§1.6, E6).
 //! 6. `gravity` — external forces change velocities (semi-implicit Euler, first half).
-//! 7. `resolve` — impulse sweeps over the impacts (§2.5, errata E9–E13).
-//! 8. `solve` — resting contact and friction: manifolds, clamped accumulated impulses,
-//!    warm starting (the paper's future work; idle without gravity and friction).
+//! 7. `resolve` — impulse sweeps over the impacts (§2.5, errata E9–E13), where `solve` is idle.
+//! 8. `solve` — resting contact, friction and impacts under gravity: clipped manifolds,
+//!    clamped accumulated impulses, warm starting, a substepped soft step (the paper's future
+//!    work; idle without gravity and friction).
 //! 9. `correct` — positional correction of penetration (§2.6, E14).
 //! 10. `sleep` — bodies still for half a second sleep until touched in motion (off unless
 //!     `Params::sleep`). Before `integrate`, which the paper's stages end with (CONTRACTS.md).

@@ -6,9 +6,11 @@
 //! reached. This is the "pairwise sequential" model of PHYSICS.md §4 (g): a Newton's cradle of
 //! touching cubes ends (0, 0, 0, 0, 1). A pair's restitution is the mean of its two actors'.
 //!
-//! These are impacts: only contacts approaching faster than the restitution threshold get
-//! one (2|g|·dt by default: zero without gravity, so the paper's model is unchanged there).
-//! Slower ones are resting contacts, which `solve` holds without bouncing.
+//! It takes the pairs `solve` leaves: those of scenes without gravity and without friction,
+//! the paper's model (PHYSICS.md §4). Under gravity or with friction `solve` holds the pair
+//! and bounces its impacts itself, over the whole manifold. Only contacts approaching faster
+//! than the restitution threshold get an impulse (zero without gravity unless a scene sets
+//! one).
 
 use crate::contact::{Contact, PairState};
 use crate::math::{Mat3, Scalar, Vector};
