@@ -41,6 +41,63 @@ pub struct SolverBody {
     pub dq: Vector,
 }
 
+/// Where a pass finds its solver bodies by slot: one slice whose last body is its static
+/// slot, or both sides of a split scene (`Sides`) for the constraints across.
+pub trait BodyStore {
+    /// The body in `slot`.
+    fn body(&self, slot: u32) -> &SolverBody;
+    /// The body in `slot`, to write.
+    fn body_mut(&mut self, slot: u32) -> &mut SolverBody;
+    /// True for a static slot: nothing may write it.
+    fn is_static(&self, slot: u32) -> bool;
+}
+
+impl BodyStore for [SolverBody] {
+    #[inline(always)]
+    fn body(&self, slot: u32) -> &SolverBody {
+        &self[slot as usize]
+    }
+
+    #[inline(always)]
+    fn body_mut(&mut self, slot: u32) -> &mut SolverBody {
+        &mut self[slot as usize]
+    }
+
+    #[inline(always)]
+    fn is_static(&self, slot: u32) -> bool {
+        slot as usize == self.len() - 1
+    }
+}
+
+/// The two sides' solver bodies, numbered as one array (the first side's, its static slot,
+/// the second side's, the last static slot), for the constraints across the split.
+pub struct Sides<'a> {
+    /// The first side, ending with its static slot.
+    pub left: &'a mut [SolverBody],
+    /// The second side, ending with the last static slot.
+    pub right: &'a mut [SolverBody],
+}
+
+impl BodyStore for Sides<'_> {
+    #[inline(always)]
+    fn body(&self, slot: u32) -> &SolverBody {
+        let (slot, n) = (slot as usize, self.left.len());
+        if slot < n { &self.left[slot] } else { &self.right[slot - n] }
+    }
+
+    #[inline(always)]
+    fn body_mut(&mut self, slot: u32) -> &mut SolverBody {
+        let (slot, n) = (slot as usize, self.left.len());
+        if slot < n { &mut self.left[slot] } else { &mut self.right[slot - n] }
+    }
+
+    #[inline(always)]
+    fn is_static(&self, slot: u32) -> bool {
+        let slot = slot as usize;
+        slot == self.left.len() - 1 || slot == self.left.len() + self.right.len() - 1
+    }
+}
+
 /// Constraints solved side by side in a batch.
 pub const LANES: usize = 4;
 

@@ -23,7 +23,9 @@ use crate::bodies::Bodies;
 use crate::contact::{Contact, Feature, Pair, PairState};
 use crate::manifold::{ClipScratch, Manifold, contact_axis, manifold, support_point};
 use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
-use crate::solver::{self, Batch, Constraint, ContactPoint, Friction, PointRows, Softness, SolverBody};
+use crate::solver::{
+    self, Batch, BodyStore, Constraint, ContactPoint, Friction, PointRows, Sides, Softness, SolverBody,
+};
 use crate::step::{CachedManifold, ConstraintGroup, Geometry, HeldPair, SolveScratch, StepContext};
 use hecs::World;
 use rayon::prelude::*;
@@ -453,30 +455,17 @@ fn substeps(ctx: &mut StepContext) {
     let h = dt / Scalar::from(count);
     let soft = Softness::new(h);
     let s = &mut ctx.scratch.solve;
-    let (g_step, g_sub) = (params.gravity * dt, params.gravity * h);
-    let statics = [s.left, s.bodies.len() - 1];
-    let free = |k: usize| !statics.contains(&k);
-    for (_, body) in s.bodies.iter_mut().enumerate().filter(|(k, _)| free(*k)) {
-        body.v -= g_step;
-    }
+    let mut plan = vec![Step::Push(-params.gravity * dt)];
     for _ in 0..count {
-        for (_, body) in s.bodies.iter_mut().enumerate().filter(|(k, _)| free(*k)) {
-            body.v += g_sub;
-        }
-        each_group(s, |bodies, g| solver::warm_start(bodies, &g.batches, &mut g.points));
-        for _ in 0..params.iterations {
-            each_group(s, |bodies, g| solver::sweep(bodies, &mut g.batches, &mut g.points, h, Some(soft)));
-        }
-        for (_, body) in s.bodies.iter_mut().enumerate().filter(|(k, _)| free(*k)) {
-            body.dx += body.v * h;
-            body.dq += body.w * h;
-        }
-        each_group(s, |bodies, g| solver::sweep(bodies, &mut g.batches, &mut g.points, h, None));
+        plan.extend([Step::Push(params.gravity * h), Step::Pass(Pass::Warm)]);
+        plan.extend((0..params.iterations).map(|_| Step::Pass(Pass::Solve(soft))));
+        plan.extend([Step::Move(h), Step::Pass(Pass::Relax)]);
     }
-    let threshold = params.restitution_threshold(dt);
-    each_group(s, |bodies, g| solver::restitution(bodies, &g.batches, &mut g.points, threshold));
+    plan.push(Step::Pass(Pass::Restitution(params.restitution_threshold(dt))));
+    drive(s, &plan, h);
+    let statics = [s.left, s.bodies.len() - 1];
     let b = &mut ctx.bodies;
-    let bodies = s.bodies.iter().zip(&s.scale).enumerate().filter(|(k, _)| free(*k));
+    let bodies = s.bodies.iter().zip(&s.scale).enumerate().filter(|(k, _)| !statics.contains(k));
     for (&i, (_, (body, scale))) in s.moving.iter().zip(bodies) {
         let i = i as usize;
         b.velocity[i] = body.v;
@@ -489,19 +478,135 @@ fn substeps(ctx: &mut StepContext) {
     }
 }
 
-/// Runs `pass` over the constraint groups: the two sides at once (on two threads when rayon
-/// has them; they share no free body, and each side's solver bodies are a slice of their own),
-/// then the constraints across.
-fn each_group(s: &mut SolveScratch, pass: impl Fn(&mut [SolverBody], &mut ConstraintGroup) + Sync) {
+/// A pass of the kernel over a constraint group.
+#[derive(Clone, Copy, Debug)]
+enum Pass {
+    /// Re-apply the accumulated impulses.
+    Warm,
+    /// A solve sweep with this contact spring.
+    Solve(Softness),
+    /// The rigid relax sweep, with friction.
+    Relax,
+    /// Bounce the impacts faster than this [m/s].
+    Restitution(Scalar),
+}
+
+/// One step of the substeps' plan.
+#[derive(Clone, Copy, Debug)]
+enum Step {
+    /// A pass over every group.
+    Pass(Pass),
+    /// Add this to every free body's velocity (gravity's share).
+    Push(Vector),
+    /// Move every free body on by its velocity over this time [s].
+    Move(Scalar),
+}
+
+/// Runs `pass` on group `g` with its bodies `bodies`.
+fn run<B: BodyStore + ?Sized>(pass: Pass, bodies: &mut B, g: &mut ConstraintGroup, h: Scalar) {
+    match pass {
+        Pass::Warm => solver::warm_start(bodies, &g.batches, &mut g.points),
+        Pass::Solve(soft) => solver::sweep(bodies, &mut g.batches, &mut g.points, h, Some(soft)),
+        Pass::Relax => solver::sweep(bodies, &mut g.batches, &mut g.points, h, None),
+        Pass::Restitution(threshold) => solver::restitution(bodies, &g.batches, &mut g.points, threshold),
+    }
+}
+
+/// Applies a body step to the free bodies of one side (its last slot is static).
+fn apply(step: Step, side: &mut [SolverBody]) {
+    let free = side.len() - 1;
+    match step {
+        Step::Push(dv) => side[..free].iter_mut().for_each(|b| b.v += dv),
+        Step::Move(h) => side[..free].iter_mut().for_each(|b| {
+            b.dx += b.v * h;
+            b.dq += b.w * h;
+        }),
+        Step::Pass(_) => {}
+    }
+}
+
+/// Carries out the plan. Each pass runs over the first side's constraints and the second's,
+/// which share no free body and whose bodies are separate slices, then over the constraints
+/// across. With two threads the second side runs on the other thread of the pool, handed its
+/// slice for each pass and spinning between passes (a rayon join a pass cost more in waking
+/// a worker than it saved). Either way the arithmetic is the same, so the result does not
+/// depend on threads.
+fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar) {
     let [first, second, across] = &mut s.groups;
     let (left, right) = s.bodies.split_at_mut(s.left + 1);
-    if second.batches.is_empty() {
-        pass(left, first);
-    } else {
-        rayon::join(|| pass(left, first), || pass(right, second));
+    let threaded = !second.batches.is_empty() && rayon::current_num_threads() > 1;
+    if !threaded {
+        for &step in plan {
+            let Step::Pass(pass) = step else {
+                apply(step, left);
+                apply(step, right);
+                continue;
+            };
+            run(pass, left, first, h);
+            if !second.batches.is_empty() {
+                run(pass, right, second, h);
+            }
+            if !across.batches.is_empty() {
+                run(pass, &mut Sides { left: &mut *left, right: &mut *right }, across, h);
+            }
+        }
+        return;
     }
-    if !across.batches.is_empty() {
-        pass(&mut s.bodies, across);
+    // Two of the pool's own threads, not a new one each step: a fresh thread lands on either
+    // core, away from the cache that holds its side's constraints. `broadcast` runs the
+    // closure on every thread of the pool at once; the calling thread drives the plan, the
+    // next one solves the second side, any others return.
+    let me = rayon::current_thread_index().unwrap_or(0);
+    let helper_index = (me + 1) % rayon::current_num_threads();
+    let (to_helper, work) = std::sync::mpsc::channel::<Option<(&mut [SolverBody], Pass)>>();
+    let (to_main, done) = std::sync::mpsc::channel::<&mut [SolverBody]>();
+    let helper = std::sync::Mutex::new(Some((second, work, to_main)));
+    let main = std::sync::Mutex::new(Some((left, right, first, across, to_helper, done)));
+    rayon::broadcast(|ctx| {
+        if ctx.index() == helper_index {
+            let taken = helper.lock().map(|mut h| h.take()).ok().flatten();
+            let Some((second, work, to_main)) = taken else { return };
+            while let Some(Some((right, pass))) = spin(&work) {
+                run(pass, right, second, h);
+                if to_main.send(right).is_err() {
+                    return;
+                }
+            }
+        } else if ctx.index() == me {
+            let taken = main.lock().map(|mut m| m.take()).ok().flatten();
+            let Some((left, right, first, across, to_helper, done)) = taken else { return };
+            let mut right = Some(right);
+            for &step in plan {
+                let mut r = right.take().expect("the second side is back between passes");
+                let Step::Pass(pass) = step else {
+                    apply(step, left);
+                    apply(step, r);
+                    right = Some(r);
+                    continue;
+                };
+                to_helper.send(Some((r, pass))).expect("the helper runs until told to stop");
+                run(pass, left, first, h);
+                r = spin(&done).expect("the helper hands the second side back");
+                if !across.batches.is_empty() {
+                    run(pass, &mut Sides { left: &mut *left, right: &mut *r }, across, h);
+                }
+                right = Some(r);
+            }
+            // A failed send means the helper has stopped already (it panicked).
+            let _ = to_helper.send(None);
+        }
+    });
+}
+
+/// The next message on `channel`, spinning while it is empty (a pass takes tens of
+/// microseconds: parking the thread would cost more); `None` once the sender is gone.
+fn spin<T>(channel: &std::sync::mpsc::Receiver<T>) -> Option<T> {
+    loop {
+        match channel.try_recv() {
+            Ok(message) => return Some(message),
+            Err(std::sync::mpsc::TryRecvError::Empty) => std::hint::spin_loop(),
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => return None,
+        }
     }
 }
 

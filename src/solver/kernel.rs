@@ -3,7 +3,7 @@
 //! of solving the constraint alone, in the order the `solve` system gave.
 
 use super::lanes::{Batch, Lanes, PointRows, Wide};
-use super::{LANES, Softness, SolverBody};
+use super::{BodyStore, LANES, Softness};
 use crate::math::Scalar;
 
 /// The two bodies of each lane of a batch while it is solved.
@@ -29,12 +29,12 @@ impl Ends {
     /// Loads the bodies of a batch's lanes: their velocities, and with `MOTION` how far the
     /// substeps have moved them (which only the passes that read gaps need).
     #[inline(always)]
-    fn open<const MOTION: bool>(bodies: &[SolverBody], batch: &Batch) -> Self {
+    fn open<const MOTION: bool, B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
         let z = Wide::ZERO;
         let mut e =
             Self { va: z, wa: z, dqa: z, vb: z, wb: z, dqb: z, u: [0.0; LANES], d: [0.0; LANES], held: [0.0; LANES] };
         for l in 0..LANES {
-            let (a, b) = (&bodies[batch.slot[0][l] as usize], &bodies[batch.slot[1][l] as usize]);
+            let (a, b) = (bodies.body(batch.slot[0][l]), bodies.body(batch.slot[1][l]));
             let n = batch.normal.get(l);
             e.u[l] = (a.v - b.v).dot(n);
             e.va.set(l, a.v);
@@ -50,19 +50,20 @@ impl Ends {
         e
     }
 
-    /// Writes the velocities back, except into the static slot (the last), which must stay
-    /// zero and whose writes would chain every ground contact to the one before.
+    /// Writes the velocities back, except into a static slot, which must stay zero and whose
+    /// writes would chain every ground contact to the one before.
     #[inline(always)]
-    fn close(&mut self, bodies: &mut [SolverBody], batch: &Batch) {
+    fn close<B: BodyStore + ?Sized>(&mut self, bodies: &mut B, batch: &Batch) {
         self.flush(batch);
-        let fixed = bodies.len() - 1;
         for l in 0..LANES {
-            let [ia, ib] = [batch.slot[0][l] as usize, batch.slot[1][l] as usize];
-            if ia != fixed {
-                (bodies[ia].v, bodies[ia].w) = (self.va.get(l), self.wa.get(l));
+            let [ia, ib] = [batch.slot[0][l], batch.slot[1][l]];
+            if !bodies.is_static(ia) {
+                let a = bodies.body_mut(ia);
+                (a.v, a.w) = (self.va.get(l), self.wa.get(l));
             }
-            if ib != fixed {
-                (bodies[ib].v, bodies[ib].w) = (self.vb.get(l), self.wb.get(l));
+            if !bodies.is_static(ib) {
+                let b = bodies.body_mut(ib);
+                (b.v, b.w) = (self.vb.get(l), self.wb.get(l));
             }
         }
     }
@@ -135,9 +136,9 @@ fn entries<'a>(batch: &Batch, points: &'a mut [PointRows]) -> &'a mut [PointRows
 
 /// Re-applies each row's accumulated impulse (the previous substep's, or the previous step's
 /// at the first substep): a resting stack starts each substep near its solution.
-pub fn warm_start(bodies: &mut [SolverBody], batches: &[Batch], points: &mut [PointRows]) {
+pub fn warm_start<B: BodyStore + ?Sized>(bodies: &mut B, batches: &[Batch], points: &mut [PointRows]) {
     for batch in batches {
-        let mut e = Ends::open::<false>(bodies, batch);
+        let mut e = Ends::open::<false, B>(bodies, batch);
         for p in entries(batch, points).iter() {
             e.push_normal(&p.g, &batch.im, &p.impulse);
         }
@@ -159,15 +160,15 @@ pub fn warm_start(bodies: &mut [SolverBody], batches: &[Batch], points: &mut [Po
 /// a manifold is always first), and then solves friction. Friction only in the relax pass
 /// (rapier's "no friction when applying bias"): friction reacting to the push-out velocities
 /// pumps a tall stack's lean.
-pub fn sweep(
-    bodies: &mut [SolverBody],
+pub fn sweep<B: BodyStore + ?Sized>(
+    bodies: &mut B,
     batches: &mut [Batch],
     points: &mut [PointRows],
     h: Scalar,
     soft: Option<Softness>,
 ) {
     for batch in batches {
-        let mut e = Ends::open::<true>(bodies, batch);
+        let mut e = Ends::open::<true, B>(bodies, batch);
         let entries = entries(batch, points);
         // Points go in pairs (0, 1), (2, 3): a manifold's diagonals (`manifold::reduce`).
         if soft.is_none() {
@@ -397,9 +398,14 @@ fn tangent_speed(dv: &Wide, e: &Ends, t: &Wide, g: &[Wide; 2]) -> Lanes {
 /// than `threshold` [m/s] when the step began leaves at `restitution` times that speed, by an
 /// added normal impulse (accumulated, never pulling). Slower contacts rest: they do not hop.
 /// A manifold's diagonals are solved as blocks here too, so a box landing flat leaves flat.
-pub fn restitution(bodies: &mut [SolverBody], batches: &[Batch], points: &mut [PointRows], threshold: Scalar) {
+pub fn restitution<B: BodyStore + ?Sized>(
+    bodies: &mut B,
+    batches: &[Batch],
+    points: &mut [PointRows],
+    threshold: Scalar,
+) {
     for batch in batches {
-        let mut e = Ends::open::<false>(bodies, batch);
+        let mut e = Ends::open::<false, B>(bodies, batch);
         for pair in entries(batch, points).chunks_mut(2) {
             // A bouncing row: rigid, its target the reversed approach; `None` if it rests.
             let row = |r: &PointRows, l: usize| {
