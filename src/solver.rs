@@ -306,16 +306,29 @@ mod tests {
     }
 
     #[test]
+    fn the_two_sides_are_numbered_as_one_array() {
+        let (mut left, mut right) = ([SolverBody::default(); 3], [SolverBody::default(); 2]);
+        right[0].v = Vector::Y;
+        let mut sides = Sides { left: &mut left, right: &mut right };
+        assert_eq!(sides.body(3).v, Vector::Y, "slot 3 is the second side's first body");
+        sides.body_mut(1).v = Vector::X;
+        assert_eq!(sides.left[1].v, Vector::X);
+        let statics: Vec<u32> = (0..5).filter(|&k| sides.is_static(k)).collect();
+        assert_eq!(statics, [2, 4], "each side ends with its static slot");
+    }
+
+    #[test]
     fn an_idle_lane_leaves_the_bodies_alone() {
-        let mut bodies = vec![SolverBody { v: Vector::X, ..SolverBody::default() }, SolverBody::default()];
+        let mut bodies = [SolverBody { v: Vector::X, ..SolverBody::default() }, SolverBody::default()];
         let mut batch = Batch::idle(1);
         batch.set(0, &Constraint { slot: [0, 1], inv_mass: [1.0, 0.0], ..Constraint::idle(1) });
         batch.len = 1;
         let mut points = vec![PointRows::default()];
         let mut batches = [batch];
-        sweep(&mut bodies, &mut batches, &mut points, 1.0 / 240.0, Some(Softness::new(1.0 / 240.0)));
-        sweep(&mut bodies, &mut batches, &mut points, 1.0 / 240.0, None);
-        warm_start(&mut bodies, &batches, &mut points);
+        let store: &mut [SolverBody] = &mut bodies;
+        sweep(store, &mut batches, &mut points, 1.0 / 240.0, Some(Softness::new(1.0 / 240.0)));
+        sweep(store, &mut batches, &mut points, 1.0 / 240.0, None);
+        warm_start(store, &batches, &mut points);
         assert_eq!(bodies[0].v, Vector::X);
         assert_eq!(bodies[1], SolverBody::default(), "the static slot stays zero");
     }
