@@ -276,6 +276,10 @@ pub struct SolveScratch {
     pub geometry: Vec<Geometry>,
     /// Whether each pair's geometry was recycled from the previous step.
     pub recycled: Vec<bool>,
+    /// Each pair's index in `cache` (`u32::MAX` for none).
+    pub cached: Vec<u32>,
+    /// Scratch: (pair, held index) of the held pairs, in pair order.
+    pub by_pair: Vec<(u32, u32)>,
     /// Last step's impulses by pair, sorted by pair (looked up by binary search).
     pub cache: Vec<((u32, u32), CachedManifold)>,
     /// The step these constraints belong to (`correct` uses them only if `solve` ran this step).
