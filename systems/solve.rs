@@ -252,26 +252,81 @@ fn build_constraints(ctx: &mut StepContext) {
         group.points.clear();
         group.points.resize(first as usize, PointRows::default());
     }
+    // The two sides' groups filled at once (they write disjoint batches), then the third.
+    let SolveScratch {
+        groups,
+        held,
+        pairs,
+        manifolds,
+        slot,
+        scale,
+        left,
+        bodies,
+        cache,
+        cached,
+        geometry,
+        recycled,
+        ..
+    } = s;
+    let shared = Shared {
+        b,
+        params,
+        dt,
+        meshes: &ctx.meshes,
+        held,
+        pairs,
+        manifolds,
+        slot,
+        scale,
+        statics: [*left as u32, bodies.len() as u32 - 1],
+        cache,
+        cached,
+        geometry,
+        recycled,
+    };
+    let [first, second, across] = groups;
+    rayon::join(|| fill(&shared, 0, first), || (fill(&shared, 1, second), fill(&shared, 2, across)));
+}
+
+/// What `fill` reads.
+struct Shared<'a> {
+    b: &'a Bodies,
+    params: &'a crate::step::Params,
+    dt: Scalar,
+    meshes: &'a crate::mesh::MeshTable,
+    held: &'a [HeldPair],
+    pairs: &'a [Pair],
+    manifolds: &'a [Manifold],
+    slot: &'a [u32],
+    scale: &'a [Mat3],
+    statics: [u32; 2],
+    cache: &'a [((u32, u32), CachedManifold)],
+    cached: &'a [u32],
+    geometry: &'a [Geometry],
+    recycled: &'a [bool],
+}
+
+/// Writes the constraints and points of group `which`'s held pairs into its batches.
+fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
+    let (b, params, dt) = (sh.b, sh.params, sh.dt);
     // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
     // before integrating forces).
     let before = |i: usize| b.velocity[i] - if b.is_fixed(i) { Vector::ZERO } else { params.gravity * dt };
-    for held in &s.held {
+    for held in sh.held.iter().filter(|h| h.group == which) {
         let (k, lane) = (held.pair, held.lane);
-        let (pair, m) = (&s.pairs[k as usize], &s.manifolds[k as usize]);
+        let (pair, m) = (&sh.pairs[k as usize], &sh.manifolds[k as usize]);
         let contact = pair.contact().expect("ordered pairs have contacts");
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let n = contact.normal;
         let tangents = tangents(n);
-        let thin = b.thinner(&ctx.meshes, ia, ib);
-        let global = [s.slot[ia], s.slot[ib]];
-        let scale = [s.scale[global[0] as usize], s.scale[global[1] as usize]];
-        let group = &mut s.groups[usize::from(held.group)];
-        let (left, last) = (s.left as u32, s.bodies.len() as u32 - 1);
-        let slot = global.map(|i| if i == left || i == last { group.fixed } else { i - group.offset });
+        let thin = b.thinner(sh.meshes, ia, ib);
+        let global = [sh.slot[ia], sh.slot[ib]];
+        let scale = [sh.scale[global[0] as usize], sh.scale[global[1] as usize]];
+        let slot = global.map(|i| if sh.statics.contains(&i) { group.fixed } else { i - group.offset });
         let inv_mass = [b.inv_mass[ia], b.inv_mass[ib]];
-        let cached = (s.cached[k as usize] != u32::MAX).then(|| &s.cache[s.cached[k as usize] as usize].1);
+        let cached = (sh.cached[k as usize] != u32::MAX).then(|| &sh.cache[sh.cached[k as usize] as usize].1);
         let mu = b.pair_friction(ia, ib);
-        let (geometry, recycled) = (&s.geometry[k as usize], s.recycled[k as usize]);
+        let (geometry, recycled) = (&sh.geometry[k as usize], sh.recycled[k as usize]);
         let into = &mut group.batches[held.batch as usize];
         let first = into.first as usize;
         // The friction patch's centre: the mean of the points.
