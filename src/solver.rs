@@ -22,9 +22,13 @@
 
 use crate::math::{Scalar, Vector};
 
+mod build;
+mod drive;
 mod kernel;
 mod lanes;
 
+pub(crate) use build::build_constraints;
+pub(crate) use drive::{Pass, Step, drive};
 pub use kernel::{restitution, sweep, warm_start};
 pub use lanes::{Batch, FrictionRows, Lanes, PointRows, Wide};
 

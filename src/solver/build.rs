@@ -1,0 +1,350 @@
+//! Building the contact solver's constraints from the `solve` system's manifolds: solver
+//! bodies (with the split in two sides), batches of independent constraints, and each held
+//! pair's rows with the impulses of last step's matching points.
+
+use super::{Batch, Constraint, ContactPoint, Friction, PointRows, SolverBody};
+use crate::bodies::Bodies;
+use crate::contact::Pair;
+use crate::manifold::Manifold;
+use crate::math::{Mat3, Scalar, Vector};
+use crate::step::{CachedManifold, ConstraintGroup, Geometry, HeldPair, SolveScratch, StepContext};
+
+/// Fastest push out of a penetration [m/s] (Box2D v3's and rapier's 3 m/s): faster, a cube
+/// squeezed into a pile is shot out of it.
+const MAX_PUSH: Scalar = 3.0;
+
+/// A new point takes the impulse of last step's point within this distance on A [fraction of
+/// A's radius]: the same corner one step later.
+const MATCH_DISTANCE: Scalar = 0.05;
+
+/// One constraint per held pair and one point per manifold point (lever vectors, effective
+/// masses, the impulses of last step's matching point), placed in batches of independent
+/// constraints (`solver::place`), and the solver bodies they act on.
+pub(crate) fn build_constraints(ctx: &mut StepContext) {
+    let b = &ctx.bodies;
+    let (params, dt) = (&ctx.params, ctx.dt);
+    let s = &mut ctx.scratch.solve;
+    // Lowest contacts first: each forward sweep then carries the support up a stack in one
+    // pass. The order matters: top-down sweeps let a tall pyramid wobble. Ties keep pair order.
+    let up = -params.gravity.normalize_or_zero();
+    s.order.clear();
+    let held = s.manifolds.iter().enumerate().filter(|&(k, m)| m.len > 0 && s.pairs[k].contact().is_some());
+    s.order
+        .extend(held.map(|(k, m)| (m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar, k as u32)));
+    s.order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    gather_bodies(b, s);
+    // Each constraint's group: within the first side, within the second, or across; then its
+    // batches, each group placed on its own.
+    let (left, last) = (s.left as u32, s.bodies.len() as u32 - 1);
+    s.groups[0].offset = 0;
+    s.groups[0].fixed = left;
+    s.groups[1].offset = left + 1;
+    s.groups[1].fixed = last - (left + 1);
+    s.groups[2].offset = 0;
+    s.groups[2].fixed = last;
+    for group in &mut s.groups {
+        group.slots.clear();
+    }
+    s.held.clear();
+    for &(_, k) in &s.order {
+        let pair = &s.pairs[k as usize];
+        let slot = [s.slot[pair.a as usize], s.slot[pair.b as usize]];
+        let side = |i: u32| if i == left || i == last { None } else { Some(i > left) };
+        let group = match (side(slot[0]), side(slot[1])) {
+            (Some(true), Some(true) | None) | (None, Some(true)) => 1,
+            (Some(false), Some(false) | None) | (None, Some(false)) | (None, None) => 0,
+            _ => 2,
+        };
+        let g = &mut s.groups[group];
+        let local = |i: u32| if i == left || i == last { g.fixed } else { i - g.offset };
+        let slot = [local(slot[0]), local(slot[1])];
+        g.slots.push(slot);
+        s.held.push(HeldPair {
+            pair: k,
+            group: group as u8,
+            batch: 0,
+            lane: 0,
+            len: s.manifolds[k as usize].len as u8,
+        });
+    }
+    for group in &mut s.groups {
+        super::place(&group.slots, group.fixed, &mut s.last, &mut group.fill, &mut group.placed);
+        group.batches.clear();
+        group.batches.extend(group.fill.iter().map(|_| Batch::idle(group.fixed)));
+    }
+    let mut next = [0_usize; 3];
+    for held in &mut s.held {
+        let g = &mut s.groups[usize::from(held.group)];
+        (held.batch, held.lane) = g.placed[next[usize::from(held.group)]];
+        next[usize::from(held.group)] += 1;
+        let batch = &mut g.batches[held.batch as usize];
+        batch.len = batch.len.max(u32::from(held.len));
+    }
+    for group in &mut s.groups {
+        let mut first = 0;
+        for batch in &mut group.batches {
+            batch.first = first;
+            first += batch.len;
+        }
+        group.points.clear();
+        group.points.resize(first as usize, PointRows::default());
+    }
+    // The two sides' groups filled at once (they write disjoint batches), then the third.
+    let SolveScratch {
+        groups,
+        held,
+        pairs,
+        manifolds,
+        slot,
+        scale,
+        left,
+        bodies,
+        cache,
+        cached,
+        geometry,
+        recycled,
+        ..
+    } = s;
+    let shared = Shared {
+        b,
+        params,
+        dt,
+        meshes: &ctx.meshes,
+        held,
+        pairs,
+        manifolds,
+        slot,
+        scale,
+        statics: [*left as u32, bodies.len() as u32 - 1],
+        cache,
+        cached,
+        geometry,
+        recycled,
+    };
+    let [first, second, across] = groups;
+    rayon::join(|| fill(&shared, 0, first), || (fill(&shared, 1, second), fill(&shared, 2, across)));
+}
+
+/// What `fill` reads.
+struct Shared<'a> {
+    b: &'a Bodies,
+    params: &'a crate::step::Params,
+    dt: Scalar,
+    meshes: &'a crate::mesh::MeshTable,
+    held: &'a [HeldPair],
+    pairs: &'a [Pair],
+    manifolds: &'a [Manifold],
+    slot: &'a [u32],
+    scale: &'a [Mat3],
+    statics: [u32; 2],
+    cache: &'a [((u32, u32), CachedManifold)],
+    cached: &'a [u32],
+    geometry: &'a [Geometry],
+    recycled: &'a [bool],
+}
+
+/// Writes the constraints and points of group `which`'s held pairs into its batches.
+fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
+    let (b, params, dt) = (sh.b, sh.params, sh.dt);
+    // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
+    // before integrating forces).
+    let before = |i: usize| b.velocity[i] - if b.is_fixed(i) { Vector::ZERO } else { params.gravity * dt };
+    for held in sh.held.iter().filter(|h| h.group == which) {
+        let (k, lane) = (held.pair, held.lane);
+        let (pair, m) = (&sh.pairs[k as usize], &sh.manifolds[k as usize]);
+        let contact = pair.contact().expect("ordered pairs have contacts");
+        let (ia, ib) = (pair.a as usize, pair.b as usize);
+        let n = contact.normal;
+        let tangents = tangents(n);
+        let thin = b.thinner(sh.meshes, ia, ib);
+        let global = [sh.slot[ia], sh.slot[ib]];
+        let scale = [sh.scale[global[0] as usize], sh.scale[global[1] as usize]];
+        let slot = global.map(|i| if sh.statics.contains(&i) { group.fixed } else { i - group.offset });
+        let inv_mass = [b.inv_mass[ia], b.inv_mass[ib]];
+        let cached = (sh.cached[k as usize] != u32::MAX).then(|| &sh.cache[sh.cached[k as usize] as usize].1);
+        let mu = b.pair_friction(ia, ib);
+        let (geometry, recycled) = (&sh.geometry[k as usize], sh.recycled[k as usize]);
+        let into = &mut group.batches[held.batch as usize];
+        let first = into.first as usize;
+        // The friction patch's centre: the mean of the points.
+        let centre = m.points().iter().sum::<Vector>() / m.len as Scalar;
+        let mut rows = [ContactPoint::IDLE; crate::manifold::MAX_POINTS];
+        for (j, (&p, &gap)) in m.points().iter().zip(&m.gaps).enumerate() {
+            let r = [p - b.position[ia], p - b.position[ib]];
+            let g = [scale[0] * r[0].cross(n), scale[1] * r[1].cross(n)];
+            let approach =
+                (before(ia) + b.angular_velocity[ia].cross(r[0]) - before(ib) - b.angular_velocity[ib].cross(r[1]))
+                    .dot(n);
+            // A recycled point is last step's own; a new one takes the impulse of the old
+            // point at the same place on A, if any.
+            let old = cached.and_then(|c| {
+                let near = |q: usize| (c.geometry.on_a[q] - geometry.on_a[j]).length() <= MATCH_DISTANCE * b.radius[ia];
+                if recycled { Some(j) } else { (0..c.geometry.len).find(|&q| near(q)) }.map(|q| c.normal[q])
+            });
+            let k = inv_mass[0] + inv_mass[1] + g[0].length_squared() + g[1].length_squared();
+            rows[j] = ContactPoint {
+                g,
+                mass: inverse(k),
+                k,
+                impulse: old.unwrap_or(0.0),
+                gap,
+                // Only a new point bounces (rapier's rule): one held since last step is resting
+                // or rocking on it, and bouncing there keeps a settling pile astir.
+                approach: if old.is_some() { 0.0 } else { approach },
+                max_impulse: 0.0,
+                lever: (p - centre).length(),
+                coupling: 0.0,
+            };
+        }
+        // Each pair of points' coupling (`solver::ContactPoint::coupling`).
+        for j in (0..m.len.saturating_sub(1)).step_by(2) {
+            let (p, q) = (&rows[j], &rows[j + 1]);
+            rows[j].coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
+        }
+        for (j, row) in rows[..m.len].iter().enumerate() {
+            group.points[first + j].set(lane as usize, row);
+        }
+        into.set(
+            lane as usize,
+            &Constraint {
+                slot,
+                normal: n,
+                tangents,
+                inv_mass,
+                mu,
+                restitution: 0.5 * (b.restitution[ia] + b.restitution[ib]),
+                slop: params.slop * thin,
+                max_push: (params.max_correction * thin / dt).min(MAX_PUSH),
+                friction: if mu > 0.0 {
+                    friction_patch(centre, [b.position[ia], b.position[ib]], n, tangents, inv_mass, scale, cached)
+                } else {
+                    Friction::IDLE
+                },
+            },
+        );
+    }
+}
+
+/// 1/k, or 0 for k = 0 (a row between two fixed bodies, or an idle one).
+fn inverse(k: Scalar) -> Scalar {
+    if k > 0.0 { 1.0 / k } else { 0.0 }
+}
+
+/// The friction rows of a pair at its patch `centre` (see `solver::Friction`), warm-started
+/// from last step's patch impulses.
+fn friction_patch(
+    centre: Vector,
+    position: [Vector; 2],
+    n: Vector,
+    tangents: [Vector; 2],
+    inv_mass: [Scalar; 2],
+    scale: [Mat3; 2],
+    cached: Option<&CachedManifold>,
+) -> Friction {
+    let r = [centre - position[0], centre - position[1]];
+    let g = tangents.map(|t| [scale[0] * r[0].cross(t), scale[1] * r[1].cross(t)]);
+    // K = J M⁻¹ Jᵀ over the two tangent rows (their linear parts are orthogonal).
+    let linear = inv_mass[0] + inv_mass[1];
+    let k11 = linear + g[0][0].length_squared() + g[0][1].length_squared();
+    let k22 = linear + g[1][0].length_squared() + g[1][1].length_squared();
+    let k12 = g[0][0].dot(g[1][0]) + g[0][1].dot(g[1][1]);
+    let det = k11 * k22 - k12 * k12;
+    let mass = if det > 0.0 { [k22 / det, -k12 / det, k11 / det] } else { [inverse(k11), 0.0, inverse(k22)] };
+    let twist = [scale[0] * n, scale[1] * n];
+    let (jt, jw) = cached.map_or((Vector::ZERO, Vector::ZERO), |c| (c.tangent, c.twist));
+    Friction {
+        g,
+        twist,
+        mass,
+        twist_mass: inverse(twist[0].length_squared() + twist[1].length_squared()),
+        impulse: [jt.dot(tangents[0]), jt.dot(tangents[1]), jw.dot(n)],
+    }
+}
+
+/// Constraints below this many are solved as one group: splitting costs more than it saves.
+const SPLIT_MIN: usize = 256;
+
+/// Gives each free body of the held pairs a solver body and computes each one's
+/// S = (I⁻¹)^½ in world axes, S = R diag(1/√I_p) Rᵀ with R the principal frame in world axes.
+///
+/// The free bodies are split in two sides at their median along the horizontal axis of
+/// widest spread (a scene with fewer than `SPLIT_MIN` constraints stays on one side); solver
+/// bodies are the first side's, its static slot, the second side's, and the last static slot.
+/// Every fixed body maps to a static slot. The split depends on the scene only, never on the
+/// thread count, so runs are the same on one thread or two.
+fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
+    for &i in &s.moving {
+        s.slot[i as usize] = u32::MAX;
+    }
+    s.slot.resize(b.len(), u32::MAX);
+    s.moving.clear();
+    let ends = s.order.iter().flat_map(|&(_, k)| [s.pairs[k as usize].a, s.pairs[k as usize].b]);
+    s.moving.extend(ends.filter(|&i| !b.is_fixed(i as usize)));
+    s.moving.sort_unstable();
+    s.moving.dedup();
+    s.left = s.moving.len();
+    if s.order.len() >= SPLIT_MIN {
+        // The horizontal axis (across gravity) along which the bodies spread widest.
+        let spread = |axis: Vector| {
+            let along = s.moving.iter().map(|&i| b.position[i as usize].dot(axis));
+            let (lo, hi) = along.fold((Scalar::INFINITY, Scalar::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+            hi - lo
+        };
+        let axis = if spread(Vector::X) >= spread(Vector::Z) { Vector::X } else { Vector::Z };
+        s.keys.clear();
+        s.keys.extend(s.moving.iter().map(|&i| (b.position[i as usize].dot(axis), i)));
+        s.keys.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        s.moving.clear();
+        s.moving.extend(s.keys.iter().map(|k| k.1));
+        s.left = s.moving.len() / 2;
+    }
+    let (left, last) = (s.left as u32, s.moving.len() as u32 + 1);
+    for (k, &i) in s.moving.iter().enumerate() {
+        s.slot[i as usize] = if (k as u32) < left { k as u32 } else { k as u32 + 1 };
+    }
+    for pair in &s.pairs {
+        for i in [pair.a, pair.b] {
+            if b.is_fixed(i as usize) {
+                s.slot[i as usize] = last;
+            }
+        }
+    }
+    // S and S⁻¹; for equal principal moments (cubes, spheres) multiples of the identity,
+    // whatever the orientation.
+    let scale = |i: usize| {
+        let m = b.principal_moments[i];
+        if m.x == m.y && m.y == m.z {
+            return (
+                Mat3::from_diagonal(Vector::splat(1.0 / m.x.sqrt())),
+                Mat3::from_diagonal(Vector::splat(m.x.sqrt())),
+            );
+        }
+        let r = Mat3::from_quat(b.orientation[i] * b.principal_axes[i]);
+        let s = |d: Vector| r * Mat3::from_diagonal(d) * r.transpose();
+        (s(m.map(|m| 1.0 / m.sqrt())), s(m.map(Scalar::sqrt)))
+    };
+    s.scale.clear();
+    s.bodies.clear();
+    for (k, &i) in s.moving.iter().enumerate() {
+        if k == s.left {
+            s.scale.push(Mat3::ZERO);
+            s.bodies.push(SolverBody::default());
+        }
+        let (i, (scale, unscale)) = (i as usize, scale(i as usize));
+        s.bodies.push(SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() });
+        s.scale.push(scale);
+    }
+    if s.left == s.moving.len() {
+        s.scale.push(Mat3::ZERO);
+        s.bodies.push(SolverBody::default());
+    }
+    s.scale.push(Mat3::ZERO);
+    s.bodies.push(SolverBody::default());
+}
+
+/// Two unit vectors completing `n` to a right-handed orthonormal basis.
+fn tangents(n: Vector) -> [Vector; 2] {
+    let helper = if n.x.abs() < 0.57 { Vector::X } else { Vector::Y };
+    let t1 = n.cross(helper).normalize();
+    [t1, n.cross(t1)]
+}
