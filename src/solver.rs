@@ -1,10 +1,11 @@
-//! The contact solver's data and its substep kernel: the `solve` system builds one
-//! `Constraint` per held pair and one `ContactPoint` per manifold point, and this file solves
-//! them as a "soft step" (Catto, "Solver2D", 2024; Box2D v3; rapier's TGS).
+//! The contact solver: the `solve` system's manifolds become one `Constraint` per held pair and
+//! one `ContactPoint` per manifold point (`build`), solved as a "soft step" (Catto,
+//! "Solver2D", 2024; Box2D v3; rapier's TGS) by the passes of `kernel`, carried out on one
+//! thread or two by `drive`.
 //!
 //! Layout, for speed: the bodies a step's contacts touch are gathered into a dense
-//! `SolverBody` array (every fixed body shares one static slot of zeros, so no branch asks
-//! which end is fixed), and angular velocities are kept in *inertia-scaled* coordinates
+//! `SolverBody` array (fixed bodies share a static slot of zeros, so no branch asks which end
+//! is fixed), and angular velocities are kept in *inertia-scaled* coordinates
 //! ŵ = S⁻¹ω with S = (I⁻¹)^½ in world axes (rapier's trick). Then one vector per body and axis,
 //! g = S (r × d), serves both ways: the relative speed along d is Δv·d + ŵ_a·g_a − ŵ_b·g_b, an
 //! impulse j changes ŵ by ±g j, and the effective mass is 1 / (m_a⁻¹ + m_b⁻¹ + |g_a|² + |g_b|²)
@@ -15,6 +16,8 @@
 //! `LANES` at a time, interleaved, in `Batch`es of pairs that share no free body (`place`).
 //! A batch never reorders two constraints that share a free body, and the others do not
 //! interact, so the result is exactly that of solving them one by one in the given order.
+//! Large scenes are split in two sides whose constraints are solved at once, then those
+//! across (`build`, `drive`); the split follows the scene, never the thread count.
 
 // Lane loops (`for l in 0..LANES`) index several lane arrays in step: the ends, the
 // constraints and the points of a batch; an index reads plainer than a four-way zip.

@@ -267,8 +267,8 @@ pub struct SolveScratch {
     /// One entry per held pair, in solving order.
     pub held: Vec<HeldPair>,
     /// The constraints in three groups: those among the bodies of one side of the scene, of
-    /// the other, and across (`solve`'s `sides`). The first two are solved at once on two
-    /// threads, the third after them.
+    /// the other, and across (see `solver::build_constraints`). The first two are solved at
+    /// once on two threads, the third after them.
     pub groups: [ConstraintGroup; 3],
     /// Scratch of `solver::place`.
     pub last: Vec<u32>,
@@ -280,7 +280,7 @@ pub struct SolveScratch {
     pub cached: Vec<u32>,
     /// Scratch: (pair, held index) of the held pairs, in pair order.
     pub by_pair: Vec<(u32, u32)>,
-    /// Last step's impulses by pair, sorted by pair (looked up by binary search).
+    /// Last step's geometry and impulses by pair, in pair order (found through `cached`).
     pub cache: Vec<((u32, u32), CachedManifold)>,
     /// The step these constraints belong to (`correct` uses them only if `solve` ran this step).
     pub step: u64,
@@ -291,11 +291,13 @@ pub struct SolveScratch {
     pub left: usize,
     /// Scratch: each free body's coordinate along the split, with its actor index.
     pub keys: Vec<(Scalar, u32)>,
-    /// Each actor's solver-body slot (`u32::MAX` when not moving this step).
+    /// Each actor's solver-body slot (`u32::MAX` when not in a held pair this step; fixed
+    /// bodies map to the last static slot).
     pub slot: Vec<u32>,
-    /// The solver bodies, `moving.len()` of them and then the static slot.
+    /// The solver bodies: the first side's free bodies, its static slot, the second side's,
+    /// the last static slot (`solver::build_constraints`).
     pub bodies: Vec<crate::solver::SolverBody>,
-    /// S = (I⁻¹)^½ in world axes of each solver body (zero for the static slot).
+    /// S = (I⁻¹)^½ in world axes of each solver body (zero for the static slots).
     pub scale: Vec<crate::math::Mat3>,
 }
 
