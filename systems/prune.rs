@@ -119,6 +119,16 @@ fn pair_margin(p: &Pair, b: &Bodies, meshes: &MeshTable, params: &Params, dt: Sc
     }
 }
 
+/// Marks `pair` `Separated` when `apart` proves it apart by the wide margin, else `Near` when
+/// it proves it apart by the proof margin (`pair_margin`).
+fn classify(pair: &mut Pair, (wide, proof): (Scalar, Scalar), apart: impl Fn(Scalar) -> bool) {
+    if apart(wide) {
+        pair.state = PairState::Separated;
+    } else if wide > proof && apart(proof) {
+        pair.state = PairState::Near;
+    }
+}
+
 /// The interval of `p`'s vertices projected on `axis`.
 fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
     p.vertices.iter().fold((Scalar::INFINITY, Scalar::NEG_INFINITY), |(lo, hi), v| {
@@ -153,12 +163,7 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     };
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate()).for_each(|pair| {
         if let (Some(ba), Some(bb)) = (as_box(pair.a), as_box(pair.b)) {
-            let (wide, proof) = margin(pair);
-            if boxes_separated(&ba, &bb, wide) {
-                pair.state = PairState::Separated;
-            } else if wide > proof && boxes_separated(&ba, &bb, proof) {
-                pair.state = PairState::Near;
-            }
+            classify(pair, margin(pair), |m| boxes_separated(&ba, &bb, m));
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
@@ -167,12 +172,8 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let margin = |p: &Pair| pair_margin(p, b, meshes, params, dt);
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|pair| {
-        let ((pa, pb), (wide, proof)) = ((posed.get(pair.a), posed.get(pair.b)), margin(pair));
-        if separated(pa, pb, wide) {
-            pair.state = PairState::Separated;
-        } else if wide > proof && separated(pa, pb, proof) {
-            pair.state = PairState::Near;
-        }
+        let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
+        classify(pair, margin(pair), |m| separated(pa, pb, m));
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
 }

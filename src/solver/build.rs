@@ -90,21 +90,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         group.points.resize(first as usize, PointRows::default());
     }
     // The two sides' groups filled at once (they write disjoint batches), then the third.
-    let SolveScratch {
-        groups,
-        held,
-        pairs,
-        manifolds,
-        slot,
-        scale,
-        left,
-        bodies,
-        cache,
-        cached,
-        geometry,
-        recycled,
-        ..
-    } = s;
+    let SolveScratch { groups, held, pairs, manifolds, slot, scale, cache, cached, geometry, recycled, .. } = s;
     let shared = Shared {
         b,
         params,
@@ -115,7 +101,6 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         manifolds,
         slot,
         scale,
-        statics: [*left as u32, bodies.len() as u32 - 1],
         cache,
         cached,
         geometry,
@@ -136,20 +121,21 @@ struct Shared<'a> {
     manifolds: &'a [Manifold],
     slot: &'a [u32],
     scale: &'a [Mat3],
-    statics: [u32; 2],
     cache: &'a [((u32, u32), CachedManifold)],
     cached: &'a [u32],
     geometry: &'a [Geometry],
     recycled: &'a [bool],
 }
 
-/// Writes the constraints and points of group `which`'s held pairs into its batches.
+/// Writes the constraints and points of group `which`'s held pairs into its batches (their
+/// slots in the group's numbering are `group.slots`, in the same order).
 fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     let (b, params, dt) = (sh.b, sh.params, sh.dt);
+    let ConstraintGroup { slots, batches, points, .. } = group;
     // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
     // before integrating forces).
     let before = |i: usize| b.velocity[i] - if b.is_fixed(i) { Vector::ZERO } else { params.gravity * dt };
-    for held in sh.held.iter().filter(|h| h.group == which) {
+    for (held, &slot) in sh.held.iter().filter(|h| h.group == which).zip(slots.iter()) {
         let (k, lane) = (held.pair, held.lane);
         let (pair, m) = (&sh.pairs[k as usize], &sh.manifolds[k as usize]);
         let contact = pair.contact().expect("ordered pairs have contacts");
@@ -157,14 +143,12 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
         let n = contact.normal;
         let tangents = tangents(n);
         let thin = b.thinner(sh.meshes, ia, ib);
-        let global = [sh.slot[ia], sh.slot[ib]];
-        let scale = [sh.scale[global[0] as usize], sh.scale[global[1] as usize]];
-        let slot = global.map(|i| if sh.statics.contains(&i) { group.fixed } else { i - group.offset });
+        let scale = [sh.scale[sh.slot[ia] as usize], sh.scale[sh.slot[ib] as usize]];
         let inv_mass = [b.inv_mass[ia], b.inv_mass[ib]];
         let cached = (sh.cached[k as usize] != u32::MAX).then(|| &sh.cache[sh.cached[k as usize] as usize].1);
         let mu = b.pair_friction(ia, ib);
         let (geometry, recycled) = (&sh.geometry[k as usize], sh.recycled[k as usize]);
-        let into = &mut group.batches[held.batch as usize];
+        let into = &mut batches[held.batch as usize];
         let first = into.first as usize;
         // The friction patch's centre: the mean of the points.
         let centre = m.points().iter().sum::<Vector>() / m.len as Scalar;
@@ -202,7 +186,7 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
             rows[j].coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
         }
         for (j, row) in rows[..m.len].iter().enumerate() {
-            group.points[first + j].set(lane as usize, row);
+            points[first + j].set(lane as usize, row);
         }
         into.set(
             lane as usize,
@@ -325,21 +309,17 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
     };
     s.scale.clear();
     s.bodies.clear();
-    for (k, &i) in s.moving.iter().enumerate() {
-        if k == s.left {
-            s.scale.push(Mat3::ZERO);
-            s.bodies.push(SolverBody::default());
+    let (first, second) = s.moving.split_at(s.left);
+    for side in [first, second] {
+        for &i in side {
+            let (i, (scale, unscale)) = (i as usize, scale(i as usize));
+            s.bodies.push(SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() });
+            s.scale.push(scale);
         }
-        let (i, (scale, unscale)) = (i as usize, scale(i as usize));
-        s.bodies.push(SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() });
-        s.scale.push(scale);
-    }
-    if s.left == s.moving.len() {
+        // The side's static slot.
         s.scale.push(Mat3::ZERO);
         s.bodies.push(SolverBody::default());
     }
-    s.scale.push(Mat3::ZERO);
-    s.bodies.push(SolverBody::default());
 }
 
 /// Two unit vectors completing `n` to a right-handed orthonormal basis.

@@ -101,22 +101,19 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar) {
         } else if ctx.index() == me {
             let taken = main.lock().map(|mut m| m.take()).ok().flatten();
             let Some((left, right, first, across, to_helper, done)) = taken else { return };
-            let mut right = Some(right);
+            let mut right = right;
             for &step in plan {
-                let mut r = right.take().expect("the second side is back between passes");
                 let Step::Pass(pass) = step else {
                     apply(step, left);
-                    apply(step, r);
-                    right = Some(r);
+                    apply(step, right);
                     continue;
                 };
-                to_helper.send(Some((r, pass))).expect("the helper runs until told to stop");
+                to_helper.send(Some((right, pass))).expect("the helper runs until told to stop");
                 run(pass, left, first, h);
-                r = spin(&done).expect("the helper hands the second side back");
+                right = spin(&done).expect("the helper hands the second side back");
                 if !across.batches.is_empty() {
-                    run(pass, &mut Sides { left: &mut *left, right: &mut *r }, across, h);
+                    run(pass, &mut Sides { left: &mut *left, right: &mut *right }, across, h);
                 }
-                right = Some(r);
             }
             // A failed send means the helper has stopped already (it panicked).
             let _ = to_helper.send(None);

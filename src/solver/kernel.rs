@@ -83,12 +83,7 @@ impl Ends {
     /// Relative normal speeds of A against B at points with scaled levers `g`.
     #[inline(always)]
     fn normal_speed(&self, g: &[Wide; 2]) -> Lanes {
-        let (ga, gb) = (self.wa.dot(&g[0]), self.wb.dot(&g[1]));
-        let mut out = [0.0; LANES];
-        for l in 0..LANES {
-            out[l] = self.u[l] + ga[l] - gb[l];
-        }
-        out
+        with_levers(self.u, (&self.wa, &self.wb), g)
     }
 
     /// Normal impulses `j` at points with scaled levers `g`; `im` is m_a⁻¹ + m_b⁻¹.
@@ -119,12 +114,11 @@ impl Ends {
     /// substeps' displacements.
     #[inline(always)]
     fn gap(&self, g: &[Wide; 2], gap: &Lanes) -> Lanes {
-        let (ga, gb) = (self.dqa.dot(&g[0]), self.dqb.dot(&g[1]));
-        let mut out = [0.0; LANES];
+        let mut linear = *gap;
         for l in 0..LANES {
-            out[l] = gap[l] + self.d[l] + ga[l] - gb[l];
+            linear[l] += self.d[l];
         }
-        out
+        with_levers(linear, (&self.dqa, &self.dqb), g)
     }
 }
 
@@ -256,15 +250,7 @@ impl Row {
         h: Scalar,
         soft: Option<Softness>,
     ) -> Self {
-        let rigid = |bias| Self {
-            mass: r.mass[l],
-            k: r.k[l],
-            impulse: r.impulse[l],
-            bias,
-            mass_scale: 1.0,
-            impulse_scale: 0.0,
-            compliance: 0.0,
-        };
+        let rigid = |bias| Self::rigid(r, l, bias);
         match soft {
             _ if gap > 0.0 => rigid(gap / h),
             Some(s) if gap + slop < 0.0 => Self {
@@ -275,6 +261,20 @@ impl Row {
                 ..rigid(0.0)
             },
             _ => rigid(0.0),
+        }
+    }
+
+    /// Lane `l` of `r` as a rigid row with velocity bias `bias`.
+    #[inline(always)]
+    fn rigid(r: &PointRows, l: usize, bias: Scalar) -> Self {
+        Self {
+            mass: r.mass[l],
+            k: r.k[l],
+            impulse: r.impulse[l],
+            bias,
+            mass_scale: 1.0,
+            impulse_scale: 0.0,
+            compliance: 0.0,
         }
     }
 
@@ -386,12 +386,18 @@ fn friction(e: &mut Ends, batch: &mut Batch, entries: &[PointRows]) {
 /// v_a − v_b.
 #[inline(always)]
 fn tangent_speed(dv: &Wide, e: &Ends, t: &Wide, g: &[Wide; 2]) -> Lanes {
-    let (lin, ga, gb) = (dv.dot(t), e.wa.dot(&g[0]), e.wb.dot(&g[1]));
-    let mut out = [0.0; LANES];
+    with_levers(dv.dot(t), (&e.wa, &e.wb), g)
+}
+
+/// A row's relative motion in each lane: its linear part plus A's angular part along its lever
+/// minus B's, `linear + a·g_a − b·g_b` (speeds from spins, gaps from turns).
+#[inline(always)]
+fn with_levers(mut linear: Lanes, (a, b): (&Wide, &Wide), g: &[Wide; 2]) -> Lanes {
+    let (ga, gb) = (a.dot(&g[0]), b.dot(&g[1]));
     for l in 0..LANES {
-        out[l] = lin[l] + ga[l] - gb[l];
+        linear[l] = linear[l] + ga[l] - gb[l];
     }
-    out
+    linear
 }
 
 /// Restitution after the substeps (Box2D v3): a point that touched and was approaching faster
@@ -410,15 +416,7 @@ pub fn restitution<B: BodyStore + ?Sized>(
             // A bouncing row: rigid, its target the reversed approach; `None` if it rests.
             let row = |r: &PointRows, l: usize| {
                 let bounce = batch.restitution[l] > 0.0 && r.approach[l] <= -threshold && r.max_impulse[l] > 0.0;
-                bounce.then(|| Row {
-                    mass: r.mass[l],
-                    k: r.k[l],
-                    impulse: r.impulse[l],
-                    bias: batch.restitution[l] * r.approach[l],
-                    mass_scale: 1.0,
-                    impulse_scale: 0.0,
-                    compliance: 0.0,
-                })
+                bounce.then(|| Row::rigid(r, l, batch.restitution[l] * r.approach[l]))
             };
             match pair {
                 [p, q] => {

@@ -71,7 +71,7 @@ impl Wide {
 /// Up to `LANES` constraints that share no free body, solved together (`super::place`); their
 /// points are `points[first..first + len]`, one `PointRows` per point index. Unused lanes, and
 /// a lane's points beyond its own count, are idle: zero masses, both ends the static slot.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Batch {
     /// Solver-body slots of A (index 0) and B of each lane.
     pub slot: [[u32; LANES]; 2],
@@ -103,20 +103,7 @@ impl Batch {
     /// A batch of idle lanes whose ends are the static slot.
     #[must_use]
     pub fn idle(static_slot: u32) -> Self {
-        let mut batch = Self {
-            slot: [[static_slot; LANES]; 2],
-            normal: Wide::ZERO,
-            tangents: [Wide::ZERO; 2],
-            inv_mass: [[0.0; LANES]; 2],
-            im: [0.0; LANES],
-            mu: [0.0; LANES],
-            restitution: [0.0; LANES],
-            slop: [0.0; LANES],
-            max_push: [0.0; LANES],
-            friction: FrictionRows::default(),
-            first: 0,
-            len: 0,
-        };
+        let mut batch = Self::default();
         for l in 0..LANES {
             batch.set(l, &Constraint::idle(static_slot));
         }
