@@ -417,6 +417,12 @@ pub fn restitution<B: BodyStore + ?Sized>(
     threshold: Scalar,
 ) {
     for batch in batches {
+        // Most batches have no point that bounces (resting, or no restitution): their bodies
+        // are left as they are without loading them.
+        let may_bounce = |r: &PointRows| (0..LANES).any(|l| batch.restitution[l] > 0.0 && r.approach[l] <= -threshold);
+        if !entries(batch, points).iter().any(may_bounce) {
+            continue;
+        }
         let mut e = Ends::open::<false, B>(bodies, batch);
         for pair in entries(batch, points).chunks_mut(2) {
             // A bouncing row: rigid, its target the reversed approach; `None` if it rests.
