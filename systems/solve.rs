@@ -187,9 +187,9 @@ fn substeps(ctx: &mut StepContext) {
     let soft = Softness::new(h);
     let s = &mut ctx.scratch.solve;
     let mut plan = vec![Step::Push(-params.gravity * dt)];
-    for _ in 0..count {
+    for k in 0..count {
         plan.extend([Step::Push(params.gravity * h), Step::Pass(Pass::Warm)]);
-        plan.extend((0..params.iterations).map(|_| Step::Pass(Pass::Solve(soft))));
+        plan.extend((0..params.sweeps(k)).map(|_| Step::Pass(Pass::Solve(soft))));
         plan.extend([Step::Move(h), Step::Pass(Pass::Relax)]);
     }
     plan.push(Step::Pass(Pass::Restitution(params.restitution_threshold(dt))));
