@@ -1,11 +1,14 @@
 //! Snapshots: the complete state of a run, so `rigid run --resume` continues it bit for bit
 //! (100 + 100 steps give the same bits as 200). A snapshot embeds the scene's text (meshes
-//! and settings are rebuilt from it) and every actor's pose and velocities; JSON floats are
-//! written shortest-round-trip and read back exactly.
+//! and settings are rebuilt from it), every actor's pose and velocities, and what the contact
+//! solver and sleeping carry from one step to the next (the warm-start cache, how long each
+//! body has been still); JSON floats are written shortest-round-trip and read back exactly.
 
 use crate::components::{Pose, Velocity};
+use crate::manifold::MAX_POINTS;
 use crate::math::{Quat, Vector};
 use crate::sim::Sim;
+use crate::step::{CachedManifold, Geometry, SleepState};
 use serde::{Deserialize, Serialize};
 
 /// Version of the snapshot format; a reader refuses other versions.
@@ -24,6 +27,42 @@ pub struct ActorSnapshot {
     pub velocity: [f64; 3],
     /// [rad/s], world frame.
     pub angular_velocity: [f64; 3],
+}
+
+/// A held pair's entry in the contact solver's warm-start cache (`step::CachedManifold`):
+/// its points fixed to both bodies and their impulses. Without it a resumed run under gravity
+/// starts its contacts cold and drifts from the unbroken one (a pyramid by a millimetre).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactSnapshot {
+    /// The pair's actor indices (a < b).
+    pub pair: [u32; 2],
+    /// B's centre in A's body frame when the points were found [m].
+    pub offset: [f64; 3],
+    /// B's orientation relative to A's then, `[x, y, z, w]`.
+    pub turn: [f64; 4],
+    /// The normal (from B to A) in A's body frame.
+    pub normal: [f64; 3],
+    /// Each point on A, A's body frame [m].
+    pub on_a: Vec<[f64; 3]>,
+    /// Each point on B, B's body frame [m].
+    pub on_b: Vec<[f64; 3]>,
+    /// Each point's normal impulse [N·s].
+    pub impulses: Vec<f64>,
+    /// Friction impulse at the patch's centre, world frame [N·s].
+    pub tangent: [f64; 3],
+    /// Twist impulse about the normal, world frame [N·m·s].
+    pub twist: [f64; 3],
+}
+
+/// The `sleep` system's state (`step::SleepState`), one entry per actor.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SleepSnapshot {
+    /// Seconds each body has been still.
+    pub still: Vec<f64>,
+    /// Each body sleeps.
+    pub asleep: Vec<bool>,
+    /// Where each body was to end its last step (position + v·dt), `null` before the first.
+    pub reached: Vec<Option<[f64; 3]>>,
 }
 
 /// The complete state of a simulation run.
@@ -48,6 +87,12 @@ pub struct Snapshot {
     pub contacts: [u64; 3],
     /// Every actor, in index order.
     pub actors: Vec<ActorSnapshot>,
+    /// The contact solver's warm-start cache, in pair order (absent: none).
+    #[serde(default)]
+    pub warm_start: Vec<ContactSnapshot>,
+    /// Sleeping's state (absent: every body awake and never still).
+    #[serde(default)]
+    pub sleep: Option<SleepSnapshot>,
 }
 
 impl Snapshot {
@@ -74,6 +119,15 @@ impl Snapshot {
                     angular_velocity: a.velocity.angular.to_array(),
                 })
                 .collect(),
+            warm_start: sim
+                .ctx
+                .scratch
+                .solve
+                .cache
+                .iter()
+                .map(|&((a, b), ref c)| ContactSnapshot::of([a, b], c))
+                .collect(),
+            sleep: (!sim.ctx.sleep.still.is_empty()).then(|| SleepSnapshot::of(&sim.ctx.sleep)),
         }
     }
 
@@ -102,6 +156,23 @@ impl Snapshot {
                 return Err(format!("actor '{}': orientation is not a unit quaternion", s.name));
             }
         }
+        let n = self.actors.len();
+        let mut cache = Vec::with_capacity(self.warm_start.len());
+        for (k, c) in self.warm_start.iter().enumerate() {
+            let entry = c.cached().map_err(|e| format!("warm_start[{k}]: {e}"))?;
+            let [a, b] = c.pair;
+            if a >= b || b as usize >= n {
+                return Err(format!("warm_start[{k}]: pair [{a}, {b}] is not two actors a < b of {n}"));
+            }
+            if cache.last().is_some_and(|&(last, _)| last >= (a, b)) {
+                return Err(format!("warm_start[{k}]: pairs must be in increasing order"));
+            }
+            cache.push(((a, b), entry));
+        }
+        let sleep = match &self.sleep {
+            Some(s) => s.state(n)?,
+            None => SleepState::default(),
+        };
         let mut query = sim.world.query::<(&crate::components::ActorIndex, &mut Pose, &mut Velocity)>();
         for (index, pose, vel) in query.iter() {
             let s = &self.actors[index.0 as usize];
@@ -112,6 +183,90 @@ impl Snapshot {
         sim.time = self.time;
         sim.steps = self.steps;
         sim.contacts = self.contacts;
+        sim.ctx.scratch.solve.cache = cache;
+        sim.ctx.sleep = sleep;
         Ok(())
+    }
+}
+
+/// All finite: the state read back must not carry NaN into the run.
+fn finite(xs: &[f64]) -> bool {
+    xs.iter().all(|x| x.is_finite())
+}
+
+impl ContactSnapshot {
+    fn of(pair: [u32; 2], c: &CachedManifold) -> Self {
+        let g = &c.geometry;
+        Self {
+            pair,
+            offset: g.offset.to_array(),
+            turn: g.turn.to_array(),
+            normal: g.normal.to_array(),
+            on_a: g.on_a[..g.len].iter().map(|v| v.to_array()).collect(),
+            on_b: g.on_b[..g.len].iter().map(|v| v.to_array()).collect(),
+            impulses: c.normal[..g.len].to_vec(),
+            tangent: c.tangent.to_array(),
+            twist: c.twist.to_array(),
+        }
+    }
+
+    /// The cache entry, or what is wrong with it.
+    fn cached(&self) -> Result<CachedManifold, String> {
+        let len = self.impulses.len();
+        if len > MAX_POINTS || self.on_a.len() != len || self.on_b.len() != len {
+            return Err(format!("on_a, on_b and impulses must have the same length, at most {MAX_POINTS}"));
+        }
+        let vectors = [self.offset, self.normal, self.tangent, self.twist];
+        let points = self.on_a.iter().chain(&self.on_b);
+        if !finite(&self.turn) || !vectors.iter().chain(points).all(|v| finite(v)) || !finite(&self.impulses) {
+            return Err("non-finite value".to_string());
+        }
+        if self.impulses.iter().any(|&j| j < 0.0) {
+            return Err("a normal impulse is negative (they push, never pull)".to_string());
+        }
+        let mut g = Geometry {
+            offset: Vector::from_array(self.offset),
+            turn: Quat::from_array(self.turn),
+            normal: Vector::from_array(self.normal),
+            len,
+            ..Geometry::default()
+        };
+        let mut entry = CachedManifold {
+            tangent: Vector::from_array(self.tangent),
+            twist: Vector::from_array(self.twist),
+            ..CachedManifold::default()
+        };
+        for k in 0..len {
+            (g.on_a[k], g.on_b[k]) = (Vector::from_array(self.on_a[k]), Vector::from_array(self.on_b[k]));
+        }
+        entry.normal[..len].copy_from_slice(&self.impulses);
+        entry.geometry = g;
+        Ok(entry)
+    }
+}
+
+impl SleepSnapshot {
+    fn of(s: &SleepState) -> Self {
+        Self {
+            still: s.still.clone(),
+            asleep: s.asleep.clone(),
+            reached: s.reached.iter().map(|v| (!v.is_nan()).then(|| v.to_array())).collect(),
+        }
+    }
+
+    /// The sleep state for `n` actors, or what is wrong.
+    fn state(&self, n: usize) -> Result<SleepState, String> {
+        if self.still.len() != n || self.asleep.len() != n || self.reached.len() != n {
+            return Err(format!("sleep: still, asleep and reached must have one entry per actor ({n})"));
+        }
+        if self.still.iter().any(|t| !t.is_finite() || *t < 0.0) || !self.reached.iter().flatten().all(|v| finite(v)) {
+            return Err("sleep: non-finite or negative value".to_string());
+        }
+        Ok(SleepState {
+            still: self.still.clone(),
+            asleep: self.asleep.clone(),
+            reached: self.reached.iter().map(|v| v.map_or(Vector::NAN, Vector::from_array)).collect(),
+            ..SleepState::default()
+        })
     }
 }

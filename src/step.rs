@@ -264,8 +264,8 @@ pub struct CachedManifold {
 }
 
 /// Reused buffers of the contact solver (`solve`), and its warm-start cache, the one piece of
-/// state that lives from one step to the next (impulses only: it changes how fast the solver
-/// converges, never which contacts exist).
+/// its state that lives from one step to the next (recycled points and impulses; snapshots
+/// carry it, `snapshot::ContactSnapshot`).
 #[derive(Clone, Debug, Default)]
 pub struct SolveScratch {
     /// The pairs solved this step, in pair order.
@@ -314,7 +314,7 @@ pub struct SolveScratch {
 }
 
 /// Which bodies sleep, and for how long each awake one has been still: the `sleep` system's
-/// state, kept from step to step (like the warm-start cache, not part of snapshots).
+/// state, kept from step to step (and in snapshots, as the warm-start cache is).
 #[derive(Clone, Debug, Default)]
 pub struct SleepState {
     /// Seconds body i has been still.

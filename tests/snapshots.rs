@@ -1,4 +1,5 @@
-//! Snapshots: `--save` then `--resume` continues a run bit for bit (100 + 100 steps equal 200),
+//! Snapshots: `--save` then `--resume` continues a run bit for bit (100 + 100 steps equal 200,
+//! also under gravity, with resting contacts and sleeping),
 //! and `--out` carries a `state_hash` that makes that cheap to check.
 
 use std::process::{Command, Output};
@@ -12,23 +13,84 @@ fn hash(path: &std::path::Path) -> (String, serde_json::Value) {
     (v["state_hash"].as_str().expect("hash").to_string(), v)
 }
 
-#[test]
-fn resume_continues_bit_for_bit() {
-    let dir = tempfile::tempdir().expect("temp dir");
+/// Runs `scene` for 2·`half` steps whole and as `half` + `half` through `--save`/`--resume`,
+/// asserts both give the same output, and returns the snapshot taken halfway.
+fn resumes_exactly(dir: &tempfile::TempDir, scene: &str, half: u64) -> serde_json::Value {
     let p = |name: &str| dir.path().join(name).to_str().expect("utf-8").to_string();
-    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/mixed-shapes.ron");
-    let scene = scene.to_str().expect("utf-8");
-    let whole = rigid(&["run", scene, "--steps", "200", "--quiet", "--out", &p("whole.json")]);
+    let (half_steps, all_steps) = (half.to_string(), (2 * half).to_string());
+    let whole = rigid(&["run", scene, "--steps", &all_steps, "--quiet", "--out", &p("whole.json")]);
     assert!(whole.status.success(), "{}", String::from_utf8_lossy(&whole.stderr));
-    let first = rigid(&["run", scene, "--steps", "100", "--quiet", "--save", &p("half.snap")]);
+    let first = rigid(&["run", scene, "--steps", &half_steps, "--quiet", "--save", &p("half.snap")]);
     assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
-    let second = rigid(&["run", "--resume", &p("half.snap"), "--steps", "100", "--quiet", "--out", &p("resumed.json")]);
+    let second =
+        rigid(&["run", "--resume", &p("half.snap"), "--steps", &half_steps, "--quiet", "--out", &p("resumed.json")]);
     assert!(second.status.success(), "{}", String::from_utf8_lossy(&second.stderr));
     let (h1, whole) = hash(std::path::Path::new(&p("whole.json")));
     let (h2, resumed) = hash(std::path::Path::new(&p("resumed.json")));
-    assert_eq!(h1, h2, "100 + 100 steps = 200 steps");
-    assert_eq!(whole, resumed, "every field, contacts and time included");
-    assert_eq!(resumed["steps"], 200);
+    assert_eq!(h1, h2, "{scene}: {half} + {half} steps = {} steps", 2 * half);
+    assert_eq!(whole, resumed, "{scene}: every field, contacts and time included");
+    assert_eq!(resumed["steps"], 2 * half);
+    serde_json::from_str(&std::fs::read_to_string(p("half.snap")).expect("saved")).expect("JSON")
+}
+
+#[test]
+fn resume_continues_bit_for_bit() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/mixed-shapes.ron");
+    resumes_exactly(&dir, scene.to_str().expect("utf-8"), 100);
+}
+
+#[test]
+fn resume_under_gravity_keeps_the_contact_solver_and_sleeping_state() {
+    // Resting contacts are warm-started from last step's impulses and keep their points while
+    // still; sleeping counts how long each body has been still. The snapshot carries both, so
+    // a settling pyramid (sleeping on) and a rain pile resume exactly.
+    let dir = tempfile::tempdir().expect("temp dir");
+    for (name, text, half) in [
+        ("sleeping.ron", "Scene(solver: Solver(sleep: true), actors: [], spawners: [Pyramid(base: 6)])", 90),
+        ("pyramid.ron", "Scene(actors: [], spawners: [Pyramid(base: 6)])", 30),
+        ("rain.ron", "Scene(actors: [], spawners: [Rain(actors: 40, seed: 3)])", 150),
+    ] {
+        let scene = dir.path().join(name);
+        std::fs::write(&scene, text).expect("scene");
+        let snap = resumes_exactly(&dir, scene.to_str().expect("utf-8"), half);
+        if name == "sleeping.ron" {
+            let asleep = snap["sleep"]["asleep"].as_array().expect("sleep state");
+            assert!(asleep.iter().any(|s| s.as_bool() == Some(true)), "some of the pyramid sleeps by then");
+        } else {
+            assert!(!snap["warm_start"].as_array().expect("warm start").is_empty(), "{name}: contacts are held");
+        }
+    }
+}
+
+#[test]
+fn a_snapshot_with_a_pulling_contact_impulse_is_bad_input() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = dir.path().join("drop.ron");
+    std::fs::write(
+        &scene,
+        "Scene(actors: [Actor(name: \"floor\", shape: Box(size: (9.0, 1.0, 9.0)), position: (0.0, -0.5, 0.0), fixed: true),\
+                        Actor(name: \"box\", shape: Box(size: (1.0, 1.0, 1.0)), position: (0.0, 0.5, 0.0))])",
+    )
+    .expect("scene");
+    let snap = dir.path().join("s.snap");
+    let o = rigid(&[
+        "run",
+        scene.to_str().expect("utf-8"),
+        "--steps",
+        "5",
+        "--quiet",
+        "--save",
+        snap.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&snap).expect("saved")).expect("JSON");
+    v["warm_start"][0]["impulses"][0] = serde_json::json!(-1.0);
+    std::fs::write(&snap, v.to_string()).expect("rewritten");
+    let o = rigid(&["run", "--resume", snap.to_str().expect("utf-8"), "--steps", "1", "--quiet"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("s.snap") && err.contains("warm_start[0]") && err.contains("negative"), "{err}");
 }
 
 #[test]
