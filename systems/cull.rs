@@ -51,8 +51,10 @@ const LARGE_RADIUS_FACTOR: Scalar = 4.0;
 /// The grid may have at most this many cells per ordinary body (memory bound for sparse
 /// scenes: the cell grows until it fits).
 const CELLS_PER_BODY: usize = 4;
-/// Bodies per parallel work chunk of the pair search.
-const CHUNK: usize = 1024;
+/// Bodies per parallel work chunk of the pair search: small enough that the rain's 1 000 cubes
+/// make four (its cull went from 0.33 to 0.23 ms on two threads), the chunks' pairs joined
+/// in order, so the list is the same for any count.
+const CHUNK: usize = 256;
 
 /// Uniform-grid broad phase, the default: the same pairs, in the same order, as
 /// `cull_all_pairs`.
