@@ -221,6 +221,9 @@ impl ContactSnapshot {
         if !finite(&self.turn) || !vectors.iter().chain(points).all(|v| finite(v)) || !finite(&self.impulses) {
             return Err("non-finite value".to_string());
         }
+        if (Quat::from_array(self.turn).length() - 1.0).abs() > 1e-9 {
+            return Err("turn is not a unit quaternion".to_string());
+        }
         if self.impulses.iter().any(|&j| j < 0.0) {
             return Err("a normal impulse is negative (they push, never pull)".to_string());
         }
