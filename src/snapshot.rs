@@ -141,18 +141,10 @@ impl Snapshot {
             return Err(format!("actor '{a}' of the scene is '{}' in the snapshot", s.name));
         }
         for s in &self.actors {
-            let finite = s
-                .position
-                .iter()
-                .chain(&s.orientation)
-                .chain(&s.velocity)
-                .chain(&s.angular_velocity)
-                .all(|x| x.is_finite());
-            if !finite {
+            if ![&s.position[..], &s.orientation, &s.velocity, &s.angular_velocity].iter().all(|xs| finite(xs)) {
                 return Err(format!("actor '{}': non-finite state", s.name));
             }
-            let q = Quat::from_array(s.orientation);
-            if (q.length() - 1.0).abs() > 1e-9 {
+            if !unit(s.orientation) {
                 return Err(format!("actor '{}': orientation is not a unit quaternion", s.name));
             }
         }
@@ -194,6 +186,11 @@ fn finite(xs: &[f64]) -> bool {
     xs.iter().all(|x| x.is_finite())
 }
 
+/// A unit quaternion `[x, y, z, w]`, to within what the run's normalising leaves.
+fn unit(q: [f64; 4]) -> bool {
+    (Quat::from_array(q).length() - 1.0).abs() <= 1e-9
+}
+
 impl ContactSnapshot {
     fn of(pair: [u32; 2], c: &CachedManifold) -> Self {
         let g = &c.geometry;
@@ -221,7 +218,7 @@ impl ContactSnapshot {
         if !finite(&self.turn) || !vectors.iter().chain(points).all(|v| finite(v)) || !finite(&self.impulses) {
             return Err("non-finite value".to_string());
         }
-        if (Quat::from_array(self.turn).length() - 1.0).abs() > 1e-9 {
+        if !unit(self.turn) {
             return Err("turn is not a unit quaternion".to_string());
         }
         if self.impulses.iter().any(|&j| j < 0.0) {
