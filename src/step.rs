@@ -69,6 +69,13 @@ impl Params {
         speed * dt
     }
 
+    /// `speculative_distance` of every body, into `out` (by actor index): the systems that
+    /// need it for every pair compute it once per body, not twice per pair.
+    pub fn speculative_distances(&self, dt: Scalar, b: &crate::bodies::Bodies, out: &mut Vec<Scalar>) {
+        out.clear();
+        out.extend((0..b.len()).map(|i| self.speculative_distance(dt, b, i)));
+    }
+
     /// Solve sweeps in substep `k` (0-based): `iterations` in the first half, one after. The
     /// later substeps start from the earlier ones' impulses, near the solution, and one sweep
     /// holds them: on a 40-row pyramid 2, 2, 1, 1 stands as well as 2, 2, 2, 2 (4.6 cm against
@@ -354,6 +361,9 @@ impl SleepState {
 pub struct Scratch {
     /// For `cull`.
     pub cull: CullScratch,
+    /// Each body's speculative distance (`Params::speculative_distances`), refreshed by each
+    /// system that reads it (velocities change between systems).
+    pub speculative: Vec<Scalar>,
     /// For `solve`.
     pub solve: SolveScratch,
 }

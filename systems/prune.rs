@@ -108,11 +108,18 @@ pub fn boxes_separated(a: &BoxPose, b: &BoxPose, margin: Scalar) -> bool {
 /// the proof margin widened to the contact margin for pairs that may rest on each other, so
 /// `solve` still sees them while apart by less (a micro-bounce must not lose a stack's
 /// contact); apart by more than the second, no detection test can fire (`separated`).
-fn pair_margin(p: &Pair, b: &Bodies, meshes: &MeshTable, params: &Params, dt: Scalar) -> (Scalar, Scalar) {
+/// `speculative` holds each body's speculative distance.
+fn pair_margin(
+    p: &Pair,
+    b: &Bodies,
+    meshes: &MeshTable,
+    params: &Params,
+    (dt, speculative): (Scalar, &[Scalar]),
+) -> (Scalar, Scalar) {
     let (ia, ib) = (p.a as usize, p.b as usize);
     let proof = PRUNE_MARGIN * (b.radius[ia] + b.radius[ib]);
     if params.resting_contacts(dt, b.pair_friction(ia, ib)) {
-        let speculative = params.speculative_distance(dt, b, ia) + params.speculative_distance(dt, b, ib);
+        let speculative = speculative[ia] + speculative[ib];
         (proof.max(params.contact_margin * b.thinner(meshes, ia, ib) + speculative), proof)
     } else {
         (proof, proof)
@@ -151,8 +158,10 @@ fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
 /// - Cost: O(1) per box pair; otherwise O(V_A + V_B) per axis tried, at most
 ///   1 + P_A + P_B + 64 axes per pair, with early exits.
 pub fn prune(_world: &mut World, ctx: &mut StepContext) {
+    let mut speculative = std::mem::take(&mut ctx.scratch.speculative);
+    ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut speculative);
     let (b, meshes, params, dt) = (&ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
-    let margin = |p: &Pair| pair_margin(p, b, meshes, params, dt);
+    let margin = |p: &Pair| pair_margin(p, b, meshes, params, (dt, &speculative));
     let as_box = |i: u32| {
         let i = i as usize;
         meshes.get(b.mesh[i]).box_half_extents.map(|half| BoxPose {
@@ -169,13 +178,14 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     ctx.pairs.retain(|p| p.state != PairState::Separated);
     ctx.pose_candidates();
     let (posed, meshes, b, params, dt) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params, ctx.dt);
-    let margin = |p: &Pair| pair_margin(p, b, meshes, params, dt);
+    let margin = |p: &Pair| pair_margin(p, b, meshes, params, (dt, &speculative));
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|pair| {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
         classify(pair, margin(pair), |m| separated(pa, pb, m));
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
+    ctx.scratch.speculative = speculative;
 }
 
 #[cfg(test)]

@@ -67,8 +67,10 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
 /// moved relative to each other (`still`), else found afresh along the pair's least-overlap
 /// axis (`contact_axis`, `manifold`).
 fn find_manifolds(ctx: &mut StepContext) {
+    ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut ctx.scratch.speculative);
+    let speculative = &ctx.scratch.speculative;
     let s = &mut ctx.scratch.solve;
-    let (posed, meshes, b, params, dt) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params, ctx.dt);
+    let (posed, meshes, b, params) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params);
     let margin = params.contact_margin;
     let n = s.pairs.len();
     s.manifolds.resize(n, Manifold::default());
@@ -93,7 +95,7 @@ fn find_manifolds(ctx: &mut StepContext) {
     rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (geometry, recycled)), &entry)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
-        let reach = margin * thin + params.speculative_distance(dt, b, ia) + params.speculative_distance(dt, b, ib);
+        let reach = margin * thin + speculative[ia] + speculative[ib];
         let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
         let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.geometry);
         *recycled = false;
