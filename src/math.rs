@@ -52,9 +52,33 @@ pub fn is_finite_vector(v: Vector) -> bool {
     v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
 }
 
+/// An integer key ordered as `f64::total_cmp` orders `x` (−NaN < −∞ < … < −0 < +0 < … < +∞ <
+/// NaN): sorting by it (with a tie-breaking index) sorts as `total_cmp` does, with plain
+/// integer comparisons.
+#[must_use]
+pub fn total_order_key(x: Scalar) -> u64 {
+    let bits = x.to_bits();
+    // Negative numbers: all bits flipped, so larger magnitudes come first; positive numbers:
+    // the sign bit set, so they follow every negative one.
+    if bits >> 63 == 1 { !bits } else { bits | 1 << 63 }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn total_order_keys_sort_as_total_cmp() {
+        let mut rng = crate::rng::SplitMix64::new(3);
+        let mut values = vec![0.0, -0.0, 1.0, -1.0, Scalar::INFINITY, Scalar::NEG_INFINITY, Scalar::MIN_POSITIVE];
+        values.extend([Scalar::NAN, -Scalar::NAN, 5e-324, -5e-324, Scalar::MAX, Scalar::MIN]);
+        values.extend((0..500).map(|_| rng.uniform(-1e3, 1e3)));
+        for x in &values {
+            for y in &values {
+                assert_eq!(total_order_key(*x).cmp(&total_order_key(*y)), x.total_cmp(y), "{x} against {y}");
+            }
+        }
+    }
 
     #[test]
     fn exp_map_of_quarter_turn_about_z_maps_x_to_y() {

@@ -281,8 +281,9 @@ pub struct SolveScratch {
     pub manifolds: Vec<crate::manifold::Manifold>,
     /// Whether each pair is near but untouched (no test found it).
     pub near: Vec<bool>,
-    /// The order in which pairs are solved: (height of the contact against gravity, index).
-    pub order: Vec<(Scalar, u32)>,
+    /// The order in which pairs are solved: (height of the contact against gravity as a
+    /// `math::total_order_key`, index).
+    pub order: Vec<(u64, u32)>,
     /// One entry per held pair, in solving order.
     pub held: Vec<HeldPair>,
     /// The constraints in three groups: those among the bodies of one side of the scene, of
@@ -297,8 +298,8 @@ pub struct SolveScratch {
     pub recycled: Vec<bool>,
     /// Each pair's index in `cache` (`u32::MAX` for none).
     pub cached: Vec<u32>,
-    /// Scratch: (pair, held index) of the held pairs, in pair order.
-    pub by_pair: Vec<(u32, u32)>,
+    /// Scratch: each pair's held index (`u32::MAX` for a pair not held).
+    pub by_pair: Vec<u32>,
     /// Last step's geometry and impulses by pair, in pair order (found through `cached`).
     pub cache: Vec<((u32, u32), CachedManifold)>,
     /// The step these constraints belong to (`correct` uses them only if `solve` ran this step).
@@ -309,7 +310,7 @@ pub struct SolveScratch {
     /// Free bodies on the first side; solver body `left` is that side's static slot.
     pub left: usize,
     /// Scratch: each free body's coordinate along the split, with its actor index.
-    pub keys: Vec<(Scalar, u32)>,
+    pub keys: Vec<(u64, u32)>,
     /// Each actor's solver-body slot (`u32::MAX` when not in a held pair this step; fixed
     /// bodies map to the last static slot).
     pub slot: Vec<u32>,

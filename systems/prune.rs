@@ -66,10 +66,12 @@ pub struct BoxPose {
 
 /// The separating-axis test of two oriented boxes over its 15 axes (3 + 3 face normals, 9
 /// edge cross products; Gottschalk 1996, Ericsson RTCD §4.4.1), in A's frame, from the poses
-/// alone. True only when an axis shows a gap larger than `margin`: the same proof as
-/// `separated`, without touching vertices, which at 64 000 cubes is what costs.
+/// alone: the same proof as `separated`, without touching vertices, which at 64 000 cubes is
+/// what costs. For two margins at once, `[wide, proof]` with `wide ≥ proof`: whether some axis
+/// shows a gap larger than each. One pass over the axes, stopping at the first that proves the
+/// wide one, so a resting pair, which neither proves, is not tested twice.
 #[must_use]
-pub fn boxes_separated(a: &BoxPose, b: &BoxPose, margin: Scalar) -> bool {
+pub fn boxes_separated_by(a: &BoxPose, b: &BoxPose, [wide, proof]: [Scalar; 2]) -> [bool; 2] {
     let (ra_m, rb_m) = (a.rotation, b.rotation);
     // r[i][j] = A_i · B_j, t = centre of B in A's axes.
     let r = ra_m.transpose() * rb_m;
@@ -77,16 +79,22 @@ pub fn boxes_separated(a: &BoxPose, b: &BoxPose, margin: Scalar) -> bool {
     let abs_r = r.map(|row| row.abs() + Vector::splat(PARALLEL_SLACK));
     let t = ra_m.transpose() * (b.position - a.position);
     let (ha, hb) = (a.half, b.half);
+    let mut by_proof = false;
+    // Projected distance `gap` against the two boxes' reach along one axis.
+    let mut apart = |gap: Scalar, reach: Scalar| {
+        by_proof |= gap > reach + proof;
+        gap > reach + wide
+    };
     for i in 0..3 {
-        if t[i].abs() > ha[i] + hb.dot(abs_r[i]) + margin {
-            return true;
+        if apart(t[i].abs(), ha[i] + hb.dot(abs_r[i])) {
+            return [true, true];
         }
     }
     for j in 0..3 {
         let col = Vector::new(r[0][j], r[1][j], r[2][j]);
         let abs_col = Vector::new(abs_r[0][j], abs_r[1][j], abs_r[2][j]);
-        if t.dot(col).abs() > ha.dot(abs_col) + hb[j] + margin {
-            return true;
+        if apart(t.dot(col).abs(), ha.dot(abs_col) + hb[j]) {
+            return [true, true];
         }
     }
     // Axis A_i × B_j: with (i, i1, i2) and (j, j1, j2) cyclic.
@@ -96,12 +104,12 @@ pub fn boxes_separated(a: &BoxPose, b: &BoxPose, margin: Scalar) -> bool {
             let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
             let reach_a = ha[i1] * abs_r[i2][j] + ha[i2] * abs_r[i1][j];
             let reach_b = hb[j1] * abs_r[i][j2] + hb[j2] * abs_r[i][j1];
-            if (t[i2] * r[i1][j] - t[i1] * r[i2][j]).abs() > reach_a + reach_b + margin {
-                return true;
+            if apart((t[i2] * r[i1][j] - t[i1] * r[i2][j]).abs(), reach_a + reach_b) {
+                return [true, true];
             }
         }
     }
-    false
+    [false, by_proof]
 }
 
 /// The margin a pair must be apart by to be dropped [m], and the proof margin: the first is
@@ -127,11 +135,13 @@ fn pair_margin(
 }
 
 /// Marks `pair` `Separated` when `apart` proves it apart by the wide margin, else `Near` when
-/// it proves it apart by the proof margin (`pair_margin`).
-fn classify(pair: &mut Pair, (wide, proof): (Scalar, Scalar), apart: impl Fn(Scalar) -> bool) {
-    if apart(wide) {
+/// it proves it apart by the proof margin (`pair_margin`). `apart([wide, proof])` says whether
+/// it is proved apart by each (the second only asked for when the first fails).
+fn classify(pair: &mut Pair, (wide, proof): (Scalar, Scalar), apart: impl Fn([Scalar; 2]) -> [bool; 2]) {
+    let [by_wide, by_proof] = apart([wide, proof]);
+    if by_wide {
         pair.state = PairState::Separated;
-    } else if wide > proof && apart(proof) {
+    } else if wide > proof && by_proof {
         pair.state = PairState::Near;
     }
 }
@@ -148,7 +158,7 @@ fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
 /// the contact margin (kept for `solve`, skipped by the tests), so later systems walk only
 /// pairs that may touch
 /// (at 64 000 box-gas cubes: 2 400 of 267 000 sphere candidates). The broad phase's count stays
-/// in `ctx.stats.candidates`. Box–box pairs are tested from their poses (`boxes_separated`)
+/// in `ctx.stats.candidates`. Box–box pairs are tested from their poses (`boxes_separated_by`)
 /// before anything is posed; the rest by `separated` on posed meshes.
 ///
 /// - Reads: `ctx.pairs` (`Candidate` only), `ctx.bodies`, `ctx.meshes`, `ctx.posed`.
@@ -172,7 +182,7 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     };
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate()).for_each(|pair| {
         if let (Some(ba), Some(bb)) = (as_box(pair.a), as_box(pair.b)) {
-            classify(pair, margin(pair), |m| boxes_separated(&ba, &bb, m));
+            classify(pair, margin(pair), |m| boxes_separated_by(&ba, &bb, m));
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
@@ -182,7 +192,10 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|pair| {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
-        classify(pair, margin(pair), |m| separated(pa, pb, m));
+        classify(pair, margin(pair), |[wide, proof]| {
+            let by_wide = separated(pa, pb, wide);
+            [by_wide, !by_wide && wide > proof && separated(pa, pb, proof)]
+        });
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
     ctx.scratch.speculative = speculative;
@@ -206,11 +219,11 @@ mod tests {
         let margin = PRUNE_MARGIN * 3f64.sqrt();
         let generic = separated(&Posed::new(Arc::clone(&mesh), &a), &Posed::new(mesh, &b), margin);
         let half = Vector::splat(0.5);
-        let boxes = boxes_separated(
+        let boxes = boxes_separated_by(
             &BoxPose { position: a.position, rotation: Mat3::from_quat(a.orientation), half },
             &BoxPose { position: b.position, rotation: Mat3::from_quat(b.orientation), half },
-            margin,
-        );
+            [margin; 2],
+        )[0];
         assert_eq!(generic, boxes, "{a:?} {b:?}");
         generic
     }
@@ -244,5 +257,24 @@ mod tests {
             count[usize::from(apart(pose(Vector::ZERO, r1), pose(x, r2)))] += 1;
         }
         assert!(count[0] > 100 && count[1] > 100, "both answers occur: {count:?}");
+    }
+
+    #[test]
+    fn one_pass_with_two_margins_answers_as_two_tests() {
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let half = Vector::new(0.5, 0.3, 0.2);
+        let mut seen = std::collections::BTreeSet::new();
+        for _ in 0..3000 {
+            let mut draw = || Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+            let (x, r1, r2) = (draw() * 1.3, draw() * 180.0, draw() * 180.0);
+            let at = |p: Pose| BoxPose { position: p.position, rotation: Mat3::from_quat(p.orientation), half };
+            let (a, b) = (at(pose(Vector::ZERO, r1)), at(pose(x, r2)));
+            let (wide, proof) = (0.05, 1e-6);
+            let both = boxes_separated_by(&a, &b, [wide, proof]);
+            let one = |m| boxes_separated_by(&a, &b, [m; 2]);
+            assert_eq!(both, [one(wide)[0], one(proof)[0]], "{a:?} {b:?}");
+            seen.insert(both);
+        }
+        assert_eq!(seen.len(), 3, "apart by both, by the proof margin only, and by neither: {seen:?}");
     }
 }

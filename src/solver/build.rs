@@ -6,7 +6,7 @@ use super::{Batch, Constraint, ContactPoint, Friction, PointRows, SolverBody};
 use crate::bodies::Bodies;
 use crate::contact::Pair;
 use crate::manifold::Manifold;
-use crate::math::{Mat3, Scalar, Vector};
+use crate::math::{Mat3, Scalar, Vector, total_order_key};
 use crate::step::{CachedManifold, ConstraintGroup, Geometry, HeldPair, SolveScratch, StepContext};
 
 /// Fastest push out of a penetration [m/s] (Box2D v3's and rapier's 3 m/s): faster, a cube
@@ -29,9 +29,10 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     let up = -params.gravity.normalize_or_zero();
     s.order.clear();
     let held = s.manifolds.iter().enumerate().filter(|&(k, m)| m.len > 0 && s.pairs[k].contact().is_some());
-    s.order
-        .extend(held.map(|(k, m)| (m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar, k as u32)));
-    s.order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    let height = |m: &Manifold| m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar;
+    // Sorted by integer keys (`total_order_key`), cheaper to compare than floats.
+    s.order.extend(held.map(|(k, m)| (total_order_key(height(m)), k as u32)));
+    s.order.sort_unstable();
     gather_bodies(b, s);
     // Each constraint's group: within the first side, within the second, or across; then its
     // batches, each group placed on its own.
@@ -262,10 +263,18 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
     }
     s.slot.resize(b.len(), u32::MAX);
     s.moving.clear();
-    let ends = s.order.iter().flat_map(|&(_, k)| [s.pairs[k as usize].a, s.pairs[k as usize].b]);
-    s.moving.extend(ends.filter(|&i| !b.is_fixed(i as usize)));
+    // Each free end once, marked in `slot` (a body fixed last step, asleep say, may still
+    // hold the static slot there, so the mark is a value no slot takes), then in index order.
+    const MARKED: u32 = u32::MAX - 1;
+    for &(_, k) in &s.order {
+        for i in [s.pairs[k as usize].a, s.pairs[k as usize].b] {
+            if !b.is_fixed(i as usize) && s.slot[i as usize] != MARKED {
+                s.slot[i as usize] = MARKED;
+                s.moving.push(i);
+            }
+        }
+    }
     s.moving.sort_unstable();
-    s.moving.dedup();
     s.left = s.moving.len();
     if s.order.len() >= SPLIT_MIN {
         // The horizontal axis (across gravity) along which the bodies spread widest.
@@ -276,8 +285,8 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
         };
         let axis = if spread(Vector::X) >= spread(Vector::Z) { Vector::X } else { Vector::Z };
         s.keys.clear();
-        s.keys.extend(s.moving.iter().map(|&i| (b.position[i as usize].dot(axis), i)));
-        s.keys.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        s.keys.extend(s.moving.iter().map(|&i| (total_order_key(b.position[i as usize].dot(axis)), i)));
+        s.keys.sort_unstable();
         s.moving.clear();
         s.moving.extend(s.keys.iter().map(|k| k.1));
         s.left = s.moving.len() / 2;
