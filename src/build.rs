@@ -53,7 +53,7 @@ pub fn build(scene: &SceneDef, path: &Path) -> Result<Sim, SceneError> {
         max_sweeps: scene.solver.max_sweeps,
         correction: scene.solver.correction,
         slop: scene.solver.slop,
-        substeps: scene.solver.substeps,
+        substeps: scene.solver.substeps.unwrap_or_else(|| Params::substeps_for(scene.dt)),
         iterations: scene.solver.iterations,
         sleep: scene.solver.sleep,
         restitution_threshold: scene.solver.restitution_threshold,

@@ -90,8 +90,9 @@ pub struct SolverDef {
     pub correction: Scalar,
     /// Penetration left alone, fraction of the thinner body, 0..=1 (default 0.0005).
     pub slop: Scalar,
-    /// Substeps of the contact solver `solve`, 1..=64 (default 4).
-    pub substeps: u32,
+    /// Substeps of the contact solver `solve`, 1..=64 (default `Params::substeps_for(dt)`: 4,
+    /// or more for steps longer than 1/60 s, so that each substep is at most 1/240 s).
+    pub substeps: Option<u32>,
     /// Solve sweeps in each of the first half of the substeps of `solve` (the rest take one; a
     /// relax sweep follows them), 1..=1000 (default 2).
     pub iterations: u32,
@@ -108,7 +109,7 @@ impl Default for SolverDef {
             max_sweeps: p.max_sweeps,
             correction: p.correction,
             slop: p.slop,
-            substeps: p.substeps,
+            substeps: None,
             iterations: p.iterations,
             sleep: p.sleep,
             restitution_threshold: p.restitution_threshold,
@@ -457,8 +458,10 @@ fn check_scene(scene: &SceneDef, path: &Path) -> Result<(), SceneError> {
     if !(1..=1000).contains(&s.max_sweeps) {
         return Err(invalid(path, "scene", "solver.max_sweeps", format!("must be 1..=1000, got {}", s.max_sweeps)));
     }
-    if !(1..=64).contains(&s.substeps) {
-        return Err(invalid(path, "scene", "solver.substeps", format!("must be 1..=64, got {}", s.substeps)));
+    if let Some(n) = s.substeps
+        && !(1..=64).contains(&n)
+    {
+        return Err(invalid(path, "scene", "solver.substeps", format!("must be 1..=64, got {n}")));
     }
     if !(1..=1000).contains(&s.iterations) {
         return Err(invalid(path, "scene", "solver.iterations", format!("must be 1..=1000, got {}", s.iterations)));
