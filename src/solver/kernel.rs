@@ -1,53 +1,113 @@
 //! The substep passes over the batches: warm start, the solve and relax sweeps, restitution.
-//! Each works on a batch's lanes side by side (see `lanes`); per lane the arithmetic is that
-//! of solving the constraint alone, in the order the `solve` system gave.
+//! Each works on a batch's four lanes at once, in `f64x4` registers (one AVX instruction per
+//! operation on the project's machines, two SSE2 ones elsewhere); per lane the arithmetic is
+//! that of solving the constraint alone, in the order the `solve` system gave, operation for
+//! operation, so the lanes and a one-by-one solve give the same bits. Where a row's case
+//! depends on its lane (speculative, pushed or rigid; which rows of a block push), every case
+//! is computed and the lane's own selected: no branch on one lane holds up the other three.
 
 use super::lanes::{Batch, Lanes, PointRows, Wide};
 use super::{BodyStore, LANES, Softness};
 use crate::math::Scalar;
+use wide::f64x4;
+
+const _: () = assert!(LANES == 4, "the kernel's registers hold four lanes");
+
+/// One value per lane, in a register.
+type F = f64x4;
+
+/// Loads lanes.
+#[inline(always)]
+fn ld(lanes: &Lanes) -> F {
+    F::new(*lanes)
+}
+
+/// One vector per lane, in registers.
+#[derive(Clone, Copy)]
+struct V {
+    x: F,
+    y: F,
+    z: F,
+}
+
+impl V {
+    #[inline(always)]
+    fn load(w: &Wide) -> Self {
+        Self { x: ld(&w.x), y: ld(&w.y), z: ld(&w.z) }
+    }
+
+    #[inline(always)]
+    fn dot(self, o: Self) -> F {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+
+    /// `self += o · s`.
+    #[inline(always)]
+    fn add_scaled(&mut self, o: Self, s: F) {
+        self.x += o.x * s;
+        self.y += o.y * s;
+        self.z += o.z * s;
+    }
+
+    /// `self -= o · s`.
+    #[inline(always)]
+    fn sub_scaled(&mut self, o: Self, s: F) {
+        self.x -= o.x * s;
+        self.y -= o.y * s;
+        self.z -= o.z * s;
+    }
+}
 
 /// The two bodies of each lane of a batch while it is solved.
 #[derive(Clone, Copy)]
 struct Ends {
-    va: Wide,
-    wa: Wide,
-    dqa: Wide,
-    vb: Wide,
-    wb: Wide,
-    dqb: Wide,
+    va: V,
+    wa: V,
+    vb: V,
+    wb: V,
     /// (v_a − v_b)·n, kept up to date by `push_normal`: the normal rows' linear part.
-    u: Lanes,
-    /// (dx_a − dx_b)·n: how far the substeps have moved the bodies along the normal.
-    d: Lanes,
+    u: F,
     /// Normal impulse applied to `u` and the spins but not yet to the linear velocities
     /// (`flush`): a normal row's linear part is the same for every point of a pair, so it is
     /// kept as one number until something else needs the velocities.
-    held: Lanes,
+    held: F,
+}
+
+/// How far the substeps have moved each lane's bodies: what the passes that read gaps need.
+#[derive(Clone, Copy)]
+struct Motion {
+    dqa: V,
+    dqb: V,
+    /// (dx_a − dx_b)·n: along the normal.
+    d: F,
+}
+
+/// The lanes' (A, B) bodies' fields picked by `pick`, as two register vectors.
+#[inline(always)]
+fn gather<B: BodyStore + ?Sized>(
+    bodies: &B,
+    batch: &Batch,
+    pick: impl Fn(&super::SolverBody) -> crate::math::Vector,
+) -> [V; 2] {
+    let mut out = [[[0.0; LANES]; 3]; 2];
+    for end in 0..2 {
+        for l in 0..LANES {
+            let v = pick(bodies.body(batch.slot[end][l]));
+            (out[end][0][l], out[end][1][l], out[end][2][l]) = (v.x, v.y, v.z);
+        }
+    }
+    out.map(|[x, y, z]| V { x: F::new(x), y: F::new(y), z: F::new(z) })
 }
 
 impl Ends {
-    /// Loads the bodies of a batch's lanes: their velocities, and with `MOTION` how far the
-    /// substeps have moved them (which only the passes that read gaps need).
+    /// Loads the velocities of the bodies of a batch's lanes.
     #[inline(always)]
-    fn open<const MOTION: bool, B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
-        let z = Wide::ZERO;
-        let mut e =
-            Self { va: z, wa: z, dqa: z, vb: z, wb: z, dqb: z, u: [0.0; LANES], d: [0.0; LANES], held: [0.0; LANES] };
-        for l in 0..LANES {
-            let (a, b) = (bodies.body(batch.slot[0][l]), bodies.body(batch.slot[1][l]));
-            let n = batch.normal.get(l);
-            e.u[l] = (a.v - b.v).dot(n);
-            e.va.set(l, a.v);
-            e.wa.set(l, a.w);
-            e.vb.set(l, b.v);
-            e.wb.set(l, b.w);
-            if MOTION {
-                e.d[l] = (a.dx - b.dx).dot(n);
-                e.dqa.set(l, a.dq);
-                e.dqb.set(l, b.dq);
-            }
-        }
-        e
+    fn open<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
+        let [va, vb] = gather(bodies, batch, |b| b.v);
+        let [wa, wb] = gather(bodies, batch, |b| b.w);
+        let n = V::load(&batch.normal);
+        let u = (va.x - vb.x) * n.x + (va.y - vb.y) * n.y + (va.z - vb.z) * n.z;
+        Self { va, wa, vb, wb, u, held: F::ZERO }
     }
 
     /// Writes the velocities back, except into a static slot, which must stay zero and whose
@@ -55,15 +115,16 @@ impl Ends {
     #[inline(always)]
     fn close<B: BodyStore + ?Sized>(&mut self, bodies: &mut B, batch: &Batch) {
         self.flush(batch);
-        for l in 0..LANES {
-            let [ia, ib] = [batch.slot[0][l], batch.slot[1][l]];
-            if !bodies.is_static(ia) {
-                let a = bodies.body_mut(ia);
-                (a.v, a.w) = (self.va.get(l), self.wa.get(l));
-            }
-            if !bodies.is_static(ib) {
-                let b = bodies.body_mut(ib);
-                (b.v, b.w) = (self.vb.get(l), self.wb.get(l));
+        let lanes = |v: V| [v.x.to_array(), v.y.to_array(), v.z.to_array()];
+        let ends = [(lanes(self.va), lanes(self.wa)), (lanes(self.vb), lanes(self.wb))];
+        for (end, (v, w)) in ends.iter().enumerate() {
+            for l in 0..LANES {
+                let slot = batch.slot[end][l];
+                if !bodies.is_static(slot) {
+                    let body = bodies.body_mut(slot);
+                    body.v = crate::math::Vector::new(v[0][l], v[1][l], v[2][l]);
+                    body.w = crate::math::Vector::new(w[0][l], w[1][l], w[2][l]);
+                }
             }
         }
     }
@@ -71,54 +132,56 @@ impl Ends {
     /// Applies the held normal impulses to the linear velocities.
     #[inline(always)]
     fn flush(&mut self, batch: &Batch) {
-        let (mut sa, mut sb) = ([0.0; LANES], [0.0; LANES]);
-        for l in 0..LANES {
-            (sa[l], sb[l]) = (self.held[l] * batch.inv_mass[0][l], self.held[l] * batch.inv_mass[1][l]);
-        }
-        self.va.add_scaled(&batch.normal, &sa);
-        self.vb.sub_scaled(&batch.normal, &sb);
-        self.held = [0.0; LANES];
+        let n = V::load(&batch.normal);
+        let (sa, sb) = (self.held * ld(&batch.inv_mass[0]), self.held * ld(&batch.inv_mass[1]));
+        self.va.add_scaled(n, sa);
+        self.vb.sub_scaled(n, sb);
+        self.held = F::ZERO;
     }
 
     /// Relative normal speeds of A against B at points with scaled levers `g`.
     #[inline(always)]
-    fn normal_speed(&self, g: &[Wide; 2]) -> Lanes {
-        with_levers(self.u, (&self.wa, &self.wb), g)
+    fn normal_speed(&self, g: &[Wide; 2]) -> F {
+        with_levers(self.u, (self.wa, self.wb), g)
     }
 
     /// Normal impulses `j` at points with scaled levers `g`; `im` is m_a⁻¹ + m_b⁻¹.
     #[inline(always)]
-    fn push_normal(&mut self, g: &[Wide; 2], im: &Lanes, j: &Lanes) {
-        self.wa.add_scaled(&g[0], j);
-        self.wb.sub_scaled(&g[1], j);
-        for l in 0..LANES {
-            self.u[l] += j[l] * im[l];
-            self.held[l] += j[l];
-        }
+    fn push_normal(&mut self, g: &[Wide; 2], im: F, j: F) {
+        self.wa.add_scaled(V::load(&g[0]), j);
+        self.wb.sub_scaled(V::load(&g[1]), j);
+        self.u += j * im;
+        self.held += j;
     }
 
     /// Impulses `j` along `d` at the points with scaled levers `g`: +j on A, −j on B.
     #[inline(always)]
-    fn push(&mut self, d: &Wide, g: &[Wide; 2], batch: &Batch, j: &Lanes) {
-        let (mut sa, mut sb) = ([0.0; LANES], [0.0; LANES]);
-        for l in 0..LANES {
-            (sa[l], sb[l]) = (j[l] * batch.inv_mass[0][l], j[l] * batch.inv_mass[1][l]);
-        }
-        self.va.add_scaled(d, &sa);
-        self.wa.add_scaled(&g[0], j);
-        self.vb.sub_scaled(d, &sb);
-        self.wb.sub_scaled(&g[1], j);
+    fn push(&mut self, d: &Wide, g: &[Wide; 2], batch: &Batch, j: F) {
+        let (sa, sb) = (j * ld(&batch.inv_mass[0]), j * ld(&batch.inv_mass[1]));
+        let d = V::load(d);
+        self.va.add_scaled(d, sa);
+        self.wa.add_scaled(V::load(&g[0]), j);
+        self.vb.sub_scaled(d, sb);
+        self.wb.sub_scaled(V::load(&g[1]), j);
+    }
+}
+
+impl Motion {
+    /// Loads how far the substeps have moved the bodies of a batch's lanes.
+    #[inline(always)]
+    fn open<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
+        let [xa, xb] = gather(bodies, batch, |b| b.dx);
+        let [dqa, dqb] = gather(bodies, batch, |b| b.dq);
+        let n = V::load(&batch.normal);
+        let d = (xa.x - xb.x) * n.x + (xa.y - xb.y) * n.y + (xa.z - xb.z) * n.z;
+        Self { dqa, dqb, d }
     }
 
     /// The gaps of points with scaled levers `g` and starting gaps `gap`, moved on by the
     /// substeps' displacements.
     #[inline(always)]
-    fn gap(&self, g: &[Wide; 2], gap: &Lanes) -> Lanes {
-        let mut linear = *gap;
-        for l in 0..LANES {
-            linear[l] += self.d[l];
-        }
-        with_levers(linear, (&self.dqa, &self.dqb), g)
+    fn gap(&self, g: &[Wide; 2], gap: &Lanes) -> F {
+        with_levers(ld(gap) + self.d, (self.dqa, self.dqb), g)
     }
 }
 
@@ -132,16 +195,17 @@ fn entries<'a>(batch: &Batch, points: &'a mut [PointRows]) -> &'a mut [PointRows
 /// at the first substep): a resting stack starts each substep near its solution.
 pub fn warm_start<B: BodyStore + ?Sized>(bodies: &mut B, batches: &[Batch], points: &mut [PointRows]) {
     for batch in batches {
-        let mut e = Ends::open::<false, B>(bodies, batch);
+        let mut e = Ends::open(bodies, batch);
+        let im = ld(&batch.im);
         for p in entries(batch, points).iter() {
-            e.push_normal(&p.g, &batch.im, &p.impulse);
+            e.push_normal(&p.g, im, ld(&p.impulse));
         }
         e.flush(batch);
         let f = &batch.friction;
-        e.push(&batch.tangents[0], &f.g[0], batch, &f.impulse[0]);
-        e.push(&batch.tangents[1], &f.g[1], batch, &f.impulse[1]);
-        e.wa.add_scaled(&f.twist[0], &f.impulse[2]);
-        e.wb.sub_scaled(&f.twist[1], &f.impulse[2]);
+        e.push(&batch.tangents[0], &f.g[0], batch, ld(&f.impulse[0]));
+        e.push(&batch.tangents[1], &f.g[1], batch, ld(&f.impulse[1]));
+        e.wa.add_scaled(V::load(&f.twist[0]), ld(&f.impulse[2]));
+        e.wb.sub_scaled(V::load(&f.twist[1]), ld(&f.impulse[2]));
         e.close(bodies, batch);
     }
 }
@@ -162,7 +226,8 @@ pub fn sweep<B: BodyStore + ?Sized>(
     soft: Option<Softness>,
 ) {
     for batch in batches {
-        let mut e = Ends::open::<true, B>(bodies, batch);
+        let motion = Motion::open(bodies, batch);
+        let mut e = Ends::open(bodies, batch);
         let entries = entries(batch, points);
         // Points go in pairs (0, 1), (2, 3): a manifold's diagonals (`manifold::reduce`).
         if soft.is_none() {
@@ -173,13 +238,13 @@ pub fn sweep<B: BodyStore + ?Sized>(
             // 2 mm before the warm start caught up; with both, 0.8 mm.
             friction(&mut e, batch, entries);
             for pair in entries.chunks_mut(2).rev() {
-                normal_pair(&mut e, batch, pair, h, soft);
+                normal_pair(&mut e, &motion, batch, pair, h, soft);
             }
             e.flush(batch);
             friction(&mut e, batch, entries);
         } else {
             for pair in entries.chunks_mut(2) {
-                normal_pair(&mut e, batch, pair, h, soft);
+                normal_pair(&mut e, &motion, batch, pair, h, soft);
             }
         }
         e.close(bodies, batch);
@@ -188,107 +253,99 @@ pub fn sweep<B: BodyStore + ?Sized>(
 
 /// The normal rows of a pair of points (or a last single one) of each lane.
 #[inline(always)]
-fn normal_pair(e: &mut Ends, batch: &Batch, pair: &mut [PointRows], h: Scalar, soft: Option<Softness>) {
+fn normal_pair(e: &mut Ends, m: &Motion, batch: &Batch, pair: &mut [PointRows], h: Scalar, soft: Option<Softness>) {
+    let im = ld(&batch.im);
     match pair {
         [p, q] => {
-            let (gp, gq) = (e.gap(&p.g, &p.gap), e.gap(&q.g, &q.gap));
+            let (rp, rq) =
+                (Rows::new(p, m.gap(&p.g, &p.gap), batch, h, soft), Rows::new(q, m.gap(&q.g, &q.gap), batch, h, soft));
             let (up, uq) = (e.normal_speed(&p.g), e.normal_speed(&q.g));
-            let (mut dp, mut dq) = ([0.0; LANES], [0.0; LANES]);
-            for l in 0..LANES {
-                let row = |r: &PointRows, gap: Scalar| Row::new(r, l, gap, batch.slop[l], batch.max_push[l], h, soft);
-                let (new_p, new_q) = block(row(p, gp[l]), row(q, gq[l]), up[l], uq[l], p.coupling[l]);
-                (dp[l], dq[l]) = (new_p - p.impulse[l], new_q - q.impulse[l]);
-                (p.impulse[l], q.impulse[l]) = (new_p, new_q);
-                p.max_impulse[l] = p.max_impulse[l].max(new_p);
-                q.max_impulse[l] = q.max_impulse[l].max(new_q);
-            }
-            e.push_normal(&p.g, &batch.im, &dp);
-            e.push_normal(&q.g, &batch.im, &dq);
+            let (new_p, new_q) = block(&rp, &rq, up, uq, ld(&p.coupling));
+            let (dp, dq) = (settle(p, new_p), settle(q, new_q));
+            e.push_normal(&p.g, im, dp);
+            e.push_normal(&q.g, im, dq);
         }
         [p] => {
-            let (gap, u) = (e.gap(&p.g, &p.gap), e.normal_speed(&p.g));
-            let mut dp = [0.0; LANES];
-            for l in 0..LANES {
-                let new = Row::new(p, l, gap[l], batch.slop[l], batch.max_push[l], h, soft).single(u[l]);
-                dp[l] = new - p.impulse[l];
-                p.impulse[l] = new;
-                p.max_impulse[l] = p.max_impulse[l].max(new);
-            }
-            e.push_normal(&p.g, &batch.im, &dp);
+            let row = Rows::new(p, m.gap(&p.g, &p.gap), batch, h, soft);
+            let dp = settle(p, row.single(e.normal_speed(&p.g)));
+            e.push_normal(&p.g, im, dp);
         }
         _ => {}
     }
 }
 
-/// One normal row as a pass sees it.
+/// Stores a point's new accumulated impulses `new` (and the largest so far); returns the
+/// change, the impulse still to apply.
+#[inline(always)]
+fn settle(p: &mut PointRows, new: F) -> F {
+    let change = new - ld(&p.impulse);
+    p.impulse = new.to_array();
+    p.max_impulse = ld(&p.max_impulse).max(new).to_array();
+    change
+}
+
+/// The normal rows of one point of every lane.
 #[derive(Clone, Copy)]
-struct Row {
+struct Rows {
     /// Effective mass m and K_ii = 1/m.
-    mass: Scalar,
-    k: Scalar,
+    mass: F,
+    k: F,
     /// Accumulated impulse λ.
-    impulse: Scalar,
+    impulse: F,
     /// Velocity bias b: u + b ≥ 0 is the target.
-    bias: Scalar,
+    bias: F,
     /// The soft step's mass and impulse scales (1, 0 when rigid): its update
     /// Δλ = −m s_m (u + b) − s_i λ is a Gauss–Seidel step on the compliant row
     /// u + b + C λ = 0 with C = K_ii s_i / s_m, whose diagonal K_ii + C has inverse m s_m.
-    mass_scale: Scalar,
-    impulse_scale: Scalar,
+    mass_scale: F,
+    impulse_scale: F,
     /// s_i / s_m (0 when rigid).
-    compliance: Scalar,
+    compliance: F,
 }
 
-impl Row {
-    /// Lane `l` of `r`, whose gap is `gap` now.
+impl Rows {
+    /// The rows of `r`, whose gaps are `gap` now.
     ///
     /// A gap still open may close within this substep (speculative contact, u ≥ −gap/h); a
     /// penetration beyond the slop is pushed out by the soft spring in the solve pass, never
     /// faster than `max_push`, and not at all in the relax pass, which takes the push-out
-    /// velocity back.
+    /// velocity back; otherwise the row is rigid.
     #[inline(always)]
-    fn new(
-        r: &PointRows,
-        l: usize,
-        gap: Scalar,
-        slop: Scalar,
-        max_push: Scalar,
-        h: Scalar,
-        soft: Option<Softness>,
-    ) -> Self {
-        let rigid = |bias| Self::rigid(r, l, bias);
-        match soft {
-            _ if gap > 0.0 => rigid(gap / h),
-            Some(s) if gap + slop < 0.0 => Self {
-                bias: (s.bias_rate * (gap + slop)).max(-max_push),
-                mass_scale: s.mass_scale,
-                impulse_scale: s.impulse_scale,
-                compliance: s.compliance,
-                ..rigid(0.0)
-            },
-            _ => rigid(0.0),
-        }
-    }
-
-    /// Lane `l` of `r` as a rigid row with velocity bias `bias`.
-    #[inline(always)]
-    fn rigid(r: &PointRows, l: usize, bias: Scalar) -> Self {
+    fn new(r: &PointRows, gap: F, batch: &Batch, h: Scalar, soft: Option<Softness>) -> Self {
+        let open = gap.simd_gt(F::ZERO);
+        let rigid = Self::rigid(r, open.select(gap / F::splat(h), F::ZERO));
+        let Some(s) = soft else { return rigid };
+        let slop = ld(&batch.slop);
+        let pushed = !open & (gap + slop).simd_lt(F::ZERO);
+        let push = (F::splat(s.bias_rate) * (gap + slop)).max(-ld(&batch.max_push));
         Self {
-            mass: r.mass[l],
-            k: r.k[l],
-            impulse: r.impulse[l],
-            bias,
-            mass_scale: 1.0,
-            impulse_scale: 0.0,
-            compliance: 0.0,
+            bias: pushed.select(push, rigid.bias),
+            mass_scale: pushed.select(F::splat(s.mass_scale), rigid.mass_scale),
+            impulse_scale: pushed.select(F::splat(s.impulse_scale), rigid.impulse_scale),
+            compliance: pushed.select(F::splat(s.compliance), rigid.compliance),
+            ..rigid
         }
     }
 
-    /// The row's new impulse solved alone, from relative normal speed `u`.
+    /// The rows of `r` held rigidly with velocity bias `bias`.
     #[inline(always)]
-    fn single(&self, u: Scalar) -> Scalar {
+    fn rigid(r: &PointRows, bias: F) -> Self {
+        Self {
+            mass: ld(&r.mass),
+            k: ld(&r.k),
+            impulse: ld(&r.impulse),
+            bias,
+            mass_scale: F::ONE,
+            impulse_scale: F::ZERO,
+            compliance: F::ZERO,
+        }
+    }
+
+    /// Each row's new impulse solved alone, from relative normal speeds `u`.
+    #[inline(always)]
+    fn single(&self, u: F) -> F {
         let dj = -self.mass * self.mass_scale * (u + self.bias) - self.impulse_scale * self.impulse;
-        (self.impulse + dj).max(0.0)
+        (self.impulse + dj).max(F::ZERO)
     }
 }
 
@@ -297,44 +354,45 @@ impl Row {
 /// λ + Δλ ≥ 0, by trying which rows push (Box2D v2's block solver, here over a manifold's
 /// diagonals, whose rows fight each other: pushing one corner tips the body away from the
 /// opposite one, so one Gauss–Seidel sweep of the four corners of a box landing flat leaves it
-/// spinning, and the next substep's warm start bounces it). Returns the new impulses.
+/// spinning, and the next substep's warm start bounces it). Every case is computed in every
+/// lane and the first that holds is taken, in the order: an idle row (one Gauss–Seidel step
+/// each), both apart and staying so, both pushing, only the first, only the second, neither,
+/// and, when round-off left no case exact, one Gauss–Seidel step each. Returns the new
+/// impulses.
 #[inline(always)]
-fn block(p: Row, q: Row, u: Scalar, v: Scalar, m01: Scalar) -> (Scalar, Scalar) {
-    if q.mass == 0.0 || p.mass == 0.0 {
-        // A last single point (the other idle), or an idle pair: one after the other.
-        let new_p = p.single(u);
-        return (new_p, q.single(v + m01 * (new_p - p.impulse)));
-    }
+fn block(p: &Rows, q: &Rows, u: F, v: F, m01: F) -> (F, F) {
+    let zero = F::ZERO;
+    let (l0, l1) = (p.impulse, q.impulse);
+    // One Gauss–Seidel step each: an idle row (a last single point, an idle pair), or no case.
+    let gs0 = p.single(u);
+    let gs1 = q.single(v + m01 * (gs0 - l0));
+    let idle = q.mass.simd_eq(zero) | p.mass.simd_eq(zero);
     let (cp, cq) = (p.compliance * p.k, q.compliance * q.k);
-    let lambda = [p.impulse, q.impulse];
-    let r = [u + p.bias + cp * lambda[0], v + q.bias + cq * lambda[1]];
-    if lambda == [0.0, 0.0] && r[0] >= 0.0 && r[1] >= 0.0 {
-        return (0.0, 0.0); // apart, or touching without pushing, and staying so
-    }
+    let (r0, r1) = (u + p.bias + cp * l0, v + q.bias + cq * l1);
+    let apart = l0.simd_eq(zero) & l1.simd_eq(zero) & r0.simd_ge(zero) & r1.simd_ge(zero);
     let (m00, m11) = (p.k + cp, q.k + cq);
     let det = m00 * m11 - m01 * m01;
-    if det > 1e-9 * m00 * m11 {
-        let inv = 1.0 / det;
-        let both = [lambda[0] - (m11 * r[0] - m01 * r[1]) * inv, lambda[1] - (m00 * r[1] - m01 * r[0]) * inv];
-        if both[0] >= 0.0 && both[1] >= 0.0 {
-            return (both[0], both[1]);
-        }
+    let inv = F::ONE / det;
+    let (both0, both1) = (l0 - (m11 * r0 - m01 * r1) * inv, l1 - (m00 * r1 - m01 * r0) * inv);
+    let both = det.simd_gt(F::splat(1e-9) * m00 * m11) & both0.simd_ge(zero) & both1.simd_ge(zero);
+    let first = l0 - (r0 - m01 * l1) * (p.mass * p.mass_scale);
+    let first_only = first.simd_ge(zero) & (r1 + m01 * (first - l0) - m11 * l1).simd_ge(zero);
+    let second = l1 - (r1 - m01 * l0) * (q.mass * q.mass_scale);
+    let second_only = second.simd_ge(zero) & (r0 + m01 * (second - l1) - m00 * l0).simd_ge(zero);
+    let neither = (r0 - m00 * l0 - m01 * l1).simd_ge(zero) & (r1 - m01 * l0 - m11 * l1).simd_ge(zero);
+    // Chosen from the last case to the first, so the first that holds wins.
+    let (mut new_p, mut new_q) = (gs0, gs1);
+    for (case, a, b) in [
+        (neither, zero, zero),
+        (second_only, zero, second),
+        (first_only, first, zero),
+        (both, both0, both1),
+        (apart, zero, zero),
+        (idle, gs0, gs1),
+    ] {
+        (new_p, new_q) = (case.select(a, new_p), case.select(b, new_q));
     }
-    // Only the first pushes; only the second; neither.
-    let l0 = lambda[0] - (r[0] - m01 * lambda[1]) * (p.mass * p.mass_scale);
-    if l0 >= 0.0 && r[1] + m01 * (l0 - lambda[0]) - m11 * lambda[1] >= 0.0 {
-        return (l0, 0.0);
-    }
-    let l1 = lambda[1] - (r[1] - m01 * lambda[0]) * (q.mass * q.mass_scale);
-    if l1 >= 0.0 && r[0] + m01 * (l1 - lambda[1]) - m00 * lambda[0] >= 0.0 {
-        return (0.0, l1);
-    }
-    if r[0] - m00 * lambda[0] - m01 * lambda[1] >= 0.0 && r[1] - m01 * lambda[0] - m11 * lambda[1] >= 0.0 {
-        return (0.0, 0.0);
-    }
-    // Round-off left no case exact: one Gauss–Seidel step each.
-    let new_p = p.single(u);
-    (new_p, q.single(v + m01 * (new_p - p.impulse)))
+    (new_p, new_q)
 }
 
 /// The friction patches of a batch (see `super::Friction`): the two tangent rows together,
@@ -342,68 +400,50 @@ fn block(p: Row, q: Row, u: Scalar, v: Scalar, m01: Scalar) -> (Scalar, Scalar) 
 /// velocities must be up to date (`Ends::flush`).
 #[inline(always)]
 fn friction(e: &mut Ends, batch: &mut Batch, entries: &[PointRows]) {
-    let (mut total, mut moment) = ([0.0; LANES], [0.0; LANES]);
+    let (mut total, mut moment) = (F::ZERO, F::ZERO);
     for p in entries {
-        for l in 0..LANES {
-            total[l] += p.impulse[l];
-            moment[l] += p.impulse[l] * p.lever[l];
-        }
+        let impulse = ld(&p.impulse);
+        total += impulse;
+        moment += impulse * ld(&p.lever);
     }
-    let dv = {
-        let mut dv = e.va;
-        dv.sub_scaled(&e.vb, &[1.0; LANES]);
-        dv
-    };
+    let dv = V { x: e.va.x - e.vb.x, y: e.va.y - e.vb.y, z: e.va.z - e.vb.z };
     let f = &mut batch.friction;
-    let (s1, s2) =
-        (tangent_speed(&dv, e, &batch.tangents[0], &f.g[0]), tangent_speed(&dv, e, &batch.tangents[1], &f.g[1]));
-    let (mut d1, mut d2) = ([0.0; LANES], [0.0; LANES]);
-    for l in 0..LANES {
-        let [m11, m12, m22] = [f.mass[0][l], f.mass[1][l], f.mass[2][l]];
-        let mut j1 = f.impulse[0][l] - (m11 * s1[l] + m12 * s2[l]);
-        let mut j2 = f.impulse[1][l] - (m12 * s1[l] + m22 * s2[l]);
-        let limit = batch.mu[l] * total[l];
-        let len2 = j1 * j1 + j2 * j2;
-        // Compared squared: the square root is only taken when the impulse leaves the disc.
-        if len2 > limit * limit {
-            let scale = limit / len2.sqrt();
-            (j1, j2) = (j1 * scale, j2 * scale);
-        }
-        (d1[l], d2[l]) = (j1 - f.impulse[0][l], j2 - f.impulse[1][l]);
-        (f.impulse[0][l], f.impulse[1][l]) = (j1, j2);
-    }
-    let (t, g) = (batch.tangents, f.g);
-    e.push(&t[0], &g[0], batch, &d1);
-    e.push(&t[1], &g[1], batch, &d2);
+    let mu = ld(&batch.mu);
+    let (t1, t2) = (V::load(&batch.tangents[0]), V::load(&batch.tangents[1]));
+    let s1 = with_levers(dv.dot(t1), (e.wa, e.wb), &f.g[0]);
+    let s2 = with_levers(dv.dot(t2), (e.wa, e.wb), &f.g[1]);
+    let [m11, m12, m22] = f.mass.map(|m| ld(&m));
+    let (old1, old2) = (ld(&f.impulse[0]), ld(&f.impulse[1]));
+    let (j1, j2) = (old1 - (m11 * s1 + m12 * s2), old2 - (m12 * s1 + m22 * s2));
+    let limit = mu * total;
+    let len2 = j1 * j1 + j2 * j2;
+    // Scaled back onto the disc where it left it (the scale is not used elsewhere).
+    let outside = len2.simd_gt(limit * limit);
+    let scale = limit / len2.sqrt();
+    let (j1, j2) = (outside.select(j1 * scale, j1), outside.select(j2 * scale, j2));
+    (f.impulse[0], f.impulse[1]) = (j1.to_array(), j2.to_array());
+    let g = f.g;
+    e.push(&batch.tangents[0], &g[0], batch, j1 - old1);
+    e.push(&batch.tangents[1], &g[1], batch, j2 - old2);
     let f = &mut batch.friction;
-    let (sa, sb) = (e.wa.dot(&f.twist[0]), e.wb.dot(&f.twist[1]));
-    let mut dt = [0.0; LANES];
-    for l in 0..LANES {
-        let limit = batch.mu[l] * moment[l];
-        let jt = (f.impulse[2][l] - f.twist_mass[l] * (sa[l] - sb[l])).clamp(-limit, limit);
-        dt[l] = jt - f.impulse[2][l];
-        f.impulse[2][l] = jt;
-    }
-    e.wa.add_scaled(&f.twist[0], &dt);
-    e.wb.sub_scaled(&f.twist[1], &dt);
-}
-
-/// Relative speeds along tangents `t` at the friction centres (levers `g`), `dv` being
-/// v_a − v_b.
-#[inline(always)]
-fn tangent_speed(dv: &Wide, e: &Ends, t: &Wide, g: &[Wide; 2]) -> Lanes {
-    with_levers(dv.dot(t), (&e.wa, &e.wb), g)
+    let (twist_a, twist_b) = (V::load(&f.twist[0]), V::load(&f.twist[1]));
+    let (sa, sb) = (e.wa.dot(twist_a), e.wb.dot(twist_b));
+    let limit = mu * moment;
+    let old = ld(&f.impulse[2]);
+    // f64::clamp's steps: up to −limit, then down to limit.
+    let jt = old - ld(&f.twist_mass) * (sa - sb);
+    let jt = jt.simd_lt(-limit).select(-limit, jt);
+    let jt = jt.simd_gt(limit).select(limit, jt);
+    f.impulse[2] = jt.to_array();
+    e.wa.add_scaled(twist_a, jt - old);
+    e.wb.sub_scaled(twist_b, jt - old);
 }
 
 /// A row's relative motion in each lane: its linear part plus A's angular part along its lever
 /// minus B's, `linear + a·g_a − b·g_b` (speeds from spins, gaps from turns).
 #[inline(always)]
-fn with_levers(mut linear: Lanes, (a, b): (&Wide, &Wide), g: &[Wide; 2]) -> Lanes {
-    let (ga, gb) = (a.dot(&g[0]), b.dot(&g[1]));
-    for l in 0..LANES {
-        linear[l] = linear[l] + ga[l] - gb[l];
-    }
-    linear
+fn with_levers(linear: F, (a, b): (V, V), g: &[Wide; 2]) -> F {
+    linear + a.dot(V::load(&g[0])) - b.dot(V::load(&g[1]))
 }
 
 /// Restitution after the substeps (Box2D v3): a point that touched and was approaching faster
@@ -423,41 +463,35 @@ pub fn restitution<B: BodyStore + ?Sized>(
         if !entries(batch, points).iter().any(may_bounce) {
             continue;
         }
-        let mut e = Ends::open::<false, B>(bodies, batch);
+        let mut e = Ends::open(bodies, batch);
+        let (im, e_n) = (ld(&batch.im), ld(&batch.restitution));
+        // A point's bouncing lanes, and its rows there: rigid, the target the reversed approach.
+        let bounce = |r: &PointRows| {
+            let approach = ld(&r.approach);
+            let lanes =
+                e_n.simd_gt(F::ZERO) & approach.simd_le(F::splat(-threshold)) & ld(&r.max_impulse).simd_gt(F::ZERO);
+            (lanes, Rows::rigid(r, e_n * approach))
+        };
         for pair in entries(batch, points).chunks_mut(2) {
-            // A bouncing row: rigid, its target the reversed approach; `None` if it rests.
-            let row = |r: &PointRows, l: usize| {
-                let bounce = batch.restitution[l] > 0.0 && r.approach[l] <= -threshold && r.max_impulse[l] > 0.0;
-                bounce.then(|| Row::rigid(r, l, batch.restitution[l] * r.approach[l]))
-            };
             match pair {
                 [p, q] => {
+                    let ((bp, rp), (bq, rq)) = (bounce(p), bounce(q));
                     let (u, v) = (e.normal_speed(&p.g), e.normal_speed(&q.g));
-                    let (mut dp, mut dq) = ([0.0; LANES], [0.0; LANES]);
-                    for l in 0..LANES {
-                        let (new_p, new_q) = match (row(p, l), row(q, l)) {
-                            (Some(rp), Some(rq)) => block(rp, rq, u[l], v[l], p.coupling[l]),
-                            (Some(rp), None) => (rp.single(u[l]), q.impulse[l]),
-                            (None, Some(rq)) => (p.impulse[l], rq.single(v[l])),
-                            (None, None) => (p.impulse[l], q.impulse[l]),
-                        };
-                        (dp[l], dq[l]) = (new_p - p.impulse[l], new_q - q.impulse[l]);
-                        (p.impulse[l], q.impulse[l]) = (new_p, new_q);
-                    }
-                    e.push_normal(&p.g, &batch.im, &dp);
-                    e.push_normal(&q.g, &batch.im, &dq);
+                    let (both_p, both_q) = block(&rp, &rq, u, v, ld(&p.coupling));
+                    let both = bp & bq;
+                    let new_p = both.select(both_p, bp.select(rp.single(u), rp.impulse));
+                    let new_q = both.select(both_q, bq.select(rq.single(v), rq.impulse));
+                    let (dp, dq) = (new_p - rp.impulse, new_q - rq.impulse);
+                    (p.impulse, q.impulse) = (new_p.to_array(), new_q.to_array());
+                    e.push_normal(&p.g, im, dp);
+                    e.push_normal(&q.g, im, dq);
                 }
                 [p] => {
-                    let u = e.normal_speed(&p.g);
-                    let mut dp = [0.0; LANES];
-                    for l in 0..LANES {
-                        if let Some(rp) = row(p, l) {
-                            let new = rp.single(u[l]);
-                            dp[l] = new - p.impulse[l];
-                            p.impulse[l] = new;
-                        }
-                    }
-                    e.push_normal(&p.g, &batch.im, &dp);
+                    let (bp, rp) = bounce(p);
+                    let new = bp.select(rp.single(e.normal_speed(&p.g)), rp.impulse);
+                    let dp = new - rp.impulse;
+                    p.impulse = new.to_array();
+                    e.push_normal(&p.g, im, dp);
                 }
                 _ => {}
             }

@@ -1,6 +1,6 @@
 //! The solver's data laid out lane by lane (structure of arrays): each field holds one value
-//! per lane of a batch, so the kernel's arithmetic runs across the lanes with no shuffling of
-//! vector components, and the compiler can pair lanes in SIMD registers.
+//! per lane of a batch, so the kernel loads it into one four-lane register (`kernel`) with no
+//! shuffling of vector components.
 
 use super::{Constraint, ContactPoint, Friction, LANES};
 use crate::math::{Scalar, Vector};
@@ -34,37 +34,6 @@ impl Wide {
     #[inline(always)]
     pub fn set(&mut self, l: usize, v: Vector) {
         (self.x[l], self.y[l], self.z[l]) = (v.x, v.y, v.z);
-    }
-
-    /// The dot product in each lane.
-    #[inline(always)]
-    #[must_use]
-    pub fn dot(&self, o: &Self) -> Lanes {
-        let mut out = [0.0; LANES];
-        for l in 0..LANES {
-            out[l] = self.x[l] * o.x[l] + self.y[l] * o.y[l] + self.z[l] * o.z[l];
-        }
-        out
-    }
-
-    /// `self += o · s` in each lane.
-    #[inline(always)]
-    pub fn add_scaled(&mut self, o: &Self, s: &Lanes) {
-        for l in 0..LANES {
-            self.x[l] += o.x[l] * s[l];
-            self.y[l] += o.y[l] * s[l];
-            self.z[l] += o.z[l] * s[l];
-        }
-    }
-
-    /// `self -= o · s` in each lane.
-    #[inline(always)]
-    pub fn sub_scaled(&mut self, o: &Self, s: &Lanes) {
-        for l in 0..LANES {
-            self.x[l] -= o.x[l] * s[l];
-            self.y[l] -= o.y[l] * s[l];
-            self.z[l] -= o.z[l] * s[l];
-        }
     }
 }
 
