@@ -24,11 +24,19 @@ pub fn correction(depth: Scalar, thickness: Scalar, params: &Params) -> Scalar {
 pub fn correct(world: &mut World, ctx: &mut StepContext) {
     let held = ctx.scratch.solve.step == ctx.step && !ctx.scratch.solve.held.is_empty();
     let mut moved = false;
+    // `solve`'s pairs are a subset of these in the same (pair) order: one walk finds them.
+    let mut next_held = 0;
     for k in 0..ctx.pairs.len() {
         let pair = ctx.pairs[k];
         let Some(contact) = pair.contact() else { continue };
-        if held && ctx.scratch.solve.pairs.binary_search_by_key(&(pair.a, pair.b), |p| (p.a, p.b)).is_ok() {
-            continue; // held by `solve`, whose soft contacts push penetration out
+        if held {
+            let solved = &ctx.scratch.solve.pairs;
+            while next_held < solved.len() && (solved[next_held].a, solved[next_held].b) < (pair.a, pair.b) {
+                next_held += 1;
+            }
+            if next_held < solved.len() && (solved[next_held].a, solved[next_held].b) == (pair.a, pair.b) {
+                continue; // held by `solve`, whose soft contacts push penetration out
+            }
         }
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let b = &ctx.bodies;
