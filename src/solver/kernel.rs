@@ -354,18 +354,15 @@ impl Rows {
 /// λ + Δλ ≥ 0, by trying which rows push (Box2D v2's block solver, here over a manifold's
 /// diagonals, whose rows fight each other: pushing one corner tips the body away from the
 /// opposite one, so one Gauss–Seidel sweep of the four corners of a box landing flat leaves it
-/// spinning, and the next substep's warm start bounces it). Every case is computed in every
+/// spinning, and the next substep's warm start bounces it). The cases are computed in every
 /// lane and the first that holds is taken, in the order: an idle row (one Gauss–Seidel step
 /// each), both apart and staying so, both pushing, only the first, only the second, neither,
-/// and, when round-off left no case exact, one Gauss–Seidel step each. Returns the new
-/// impulses.
+/// and, when round-off left no case exact, one Gauss–Seidel step each; the later cases only
+/// when some lane is in none of the first three. Returns the new impulses.
 #[inline(always)]
 fn block(p: &Rows, q: &Rows, u: F, v: F, m01: F) -> (F, F) {
     let zero = F::ZERO;
     let (l0, l1) = (p.impulse, q.impulse);
-    // One Gauss–Seidel step each: an idle row (a last single point, an idle pair), or no case.
-    let gs0 = p.single(u);
-    let gs1 = q.single(v + m01 * (gs0 - l0));
     let idle = q.mass.simd_eq(zero) | p.mass.simd_eq(zero);
     let (cp, cq) = (p.compliance * p.k, q.compliance * q.k);
     let (r0, r1) = (u + p.bias + cp * l0, v + q.bias + cq * l1);
@@ -375,24 +372,36 @@ fn block(p: &Rows, q: &Rows, u: F, v: F, m01: F) -> (F, F) {
     let inv = F::ONE / det;
     let (both0, both1) = (l0 - (m11 * r0 - m01 * r1) * inv, l1 - (m00 * r1 - m01 * r0) * inv);
     let both = det.simd_gt(F::splat(1e-9) * m00 * m11) & both0.simd_ge(zero) & both1.simd_ge(zero);
-    let first = l0 - (r0 - m01 * l1) * (p.mass * p.mass_scale);
-    let first_only = first.simd_ge(zero) & (r1 + m01 * (first - l0) - m11 * l1).simd_ge(zero);
-    let second = l1 - (r1 - m01 * l0) * (q.mass * q.mass_scale);
-    let second_only = second.simd_ge(zero) & (r0 + m01 * (second - l1) - m00 * l0).simd_ge(zero);
-    let neither = (r0 - m00 * l0 - m01 * l1).simd_ge(zero) & (r1 - m01 * l0 - m11 * l1).simd_ge(zero);
-    // Chosen from the last case to the first, so the first that holds wins.
-    let (mut new_p, mut new_q) = (gs0, gs1);
-    for (case, a, b) in [
-        (neither, zero, zero),
-        (second_only, zero, second),
-        (first_only, first, zero),
-        (both, both0, both1),
-        (apart, zero, zero),
-        (idle, gs0, gs1),
-    ] {
-        (new_p, new_q) = (case.select(a, new_p), case.select(b, new_q));
+    // The cases of a resting or separating manifold; the others only where a lane needs them.
+    let (mut new_p, mut new_q) = (both0, both1);
+    if !(idle | apart | both).all() {
+        let first = l0 - (r0 - m01 * l1) * (p.mass * p.mass_scale);
+        let first_only = first.simd_ge(zero) & (r1 + m01 * (first - l0) - m11 * l1).simd_ge(zero);
+        let second = l1 - (r1 - m01 * l0) * (q.mass * q.mass_scale);
+        let second_only = second.simd_ge(zero) & (r0 + m01 * (second - l1) - m00 * l0).simd_ge(zero);
+        let neither = (r0 - m00 * l0 - m01 * l1).simd_ge(zero) & (r1 - m01 * l0 - m11 * l1).simd_ge(zero);
+        let (gs0, gs1) = gauss_seidel(p, q, u, v, m01);
+        // Chosen from the last case to the first, so the first that holds wins.
+        (new_p, new_q) = (gs0, gs1);
+        for (case, a, b) in [(neither, zero, zero), (second_only, zero, second), (first_only, first, zero)] {
+            (new_p, new_q) = (case.select(a, new_p), case.select(b, new_q));
+        }
+        (new_p, new_q) = (both.select(both0, new_p), both.select(both1, new_q));
+    }
+    (new_p, new_q) = (apart.select(zero, new_p), apart.select(zero, new_q));
+    if idle.any() {
+        let (gs0, gs1) = gauss_seidel(p, q, u, v, m01);
+        (new_p, new_q) = (idle.select(gs0, new_p), idle.select(gs1, new_q));
     }
     (new_p, new_q)
+}
+
+/// One Gauss–Seidel step for each of two rows: for an idle row (a last single point, an idle
+/// pair), or where round-off left no case of `block` exact.
+#[inline(always)]
+fn gauss_seidel(p: &Rows, q: &Rows, u: F, v: F, m01: F) -> (F, F) {
+    let new_p = p.single(u);
+    (new_p, q.single(v + m01 * (new_p - p.impulse)))
 }
 
 /// The friction patches of a batch (see `super::Friction`): the two tangent rows together,
