@@ -179,12 +179,16 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
                 max_impulse: 0.0,
                 lever: (p - centre).length(),
                 coupling: 0.0,
+                inv_det: 0.0,
             };
         }
         // Each pair of points' coupling (`solver::ContactPoint::coupling`).
         for j in (0..m.len.saturating_sub(1)).step_by(2) {
             let (p, q) = (&rows[j], &rows[j + 1]);
-            rows[j].coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
+            let coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
+            // Once a step here, not in every sweep: the kernel's division is its slowest step.
+            rows[j].inv_det = 1.0 / (p.k * q.k - coupling * coupling);
+            rows[j].coupling = coupling;
         }
         for (j, row) in rows[..m.len].iter().enumerate() {
             points[first + j].set(lane as usize, row);

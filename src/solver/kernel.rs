@@ -260,7 +260,7 @@ fn normal_pair(e: &mut Ends, m: &Motion, batch: &Batch, pair: &mut [PointRows], 
             let (rp, rq) =
                 (Rows::new(p, m.gap(&p.g, &p.gap), batch, h, soft), Rows::new(q, m.gap(&q.g, &q.gap), batch, h, soft));
             let (up, uq) = (e.normal_speed(&p.g), e.normal_speed(&q.g));
-            let (new_p, new_q) = block(&rp, &rq, up, uq, ld(&p.coupling));
+            let (new_p, new_q) = block(&rp, &rq, up, uq, (ld(&p.coupling), ld(&p.inv_det)));
             let (dp, dq) = (settle(p, new_p), settle(q, new_q));
             e.push_normal(&p.g, im, dp);
             e.push_normal(&q.g, im, dq);
@@ -312,8 +312,10 @@ impl Rows {
     /// velocity back; otherwise the row is rigid.
     #[inline(always)]
     fn new(r: &PointRows, gap: F, batch: &Batch, h: Scalar, soft: Option<Softness>) -> Self {
+        // Divisions are the kernel's slowest operations: only where a lane needs one.
         let open = gap.simd_gt(F::ZERO);
-        let rigid = Self::rigid(r, open.select(gap / F::splat(h), F::ZERO));
+        let speculative = if open.any() { open.select(gap / F::splat(h), F::ZERO) } else { F::ZERO };
+        let rigid = Self::rigid(r, speculative);
         let Some(s) = soft else { return rigid };
         let slop = ld(&batch.slop);
         let pushed = !open & (gap + slop).simd_lt(F::ZERO);
@@ -360,7 +362,7 @@ impl Rows {
 /// and, when round-off left no case exact, one Gauss–Seidel step each; the later cases only
 /// when some lane is in none of the first three. Returns the new impulses.
 #[inline(always)]
-fn block(p: &Rows, q: &Rows, u: F, v: F, m01: F) -> (F, F) {
+fn block(p: &Rows, q: &Rows, u: F, v: F, (m01, inv_rigid): (F, F)) -> (F, F) {
     let zero = F::ZERO;
     let (l0, l1) = (p.impulse, q.impulse);
     let idle = q.mass.simd_eq(zero) | p.mass.simd_eq(zero);
@@ -369,7 +371,10 @@ fn block(p: &Rows, q: &Rows, u: F, v: F, m01: F) -> (F, F) {
     let apart = l0.simd_eq(zero) & l1.simd_eq(zero) & r0.simd_ge(zero) & r1.simd_ge(zero);
     let (m00, m11) = (p.k + cp, q.k + cq);
     let det = m00 * m11 - m01 * m01;
-    let inv = F::ONE / det;
+    // Rigid rows (every row of a relax pass): m00, m11 are K₀₀, K₁₁ exactly, and `fill` has
+    // divided already, by the same numbers.
+    let rigid = (p.compliance.simd_eq(zero) & q.compliance.simd_eq(zero)).all();
+    let inv = if rigid { inv_rigid } else { F::ONE / det };
     let (both0, both1) = (l0 - (m11 * r0 - m01 * r1) * inv, l1 - (m00 * r1 - m01 * r0) * inv);
     let both = det.simd_gt(F::splat(1e-9) * m00 * m11) & both0.simd_ge(zero) & both1.simd_ge(zero);
     // The cases of a resting or separating manifold; the others only where a lane needs them.
@@ -428,8 +433,12 @@ fn friction(e: &mut Ends, batch: &mut Batch, entries: &[PointRows]) {
     let len2 = j1 * j1 + j2 * j2;
     // Scaled back onto the disc where it left it (the scale is not used elsewhere).
     let outside = len2.simd_gt(limit * limit);
-    let scale = limit / len2.sqrt();
-    let (j1, j2) = (outside.select(j1 * scale, j1), outside.select(j2 * scale, j2));
+    let (j1, j2) = if outside.any() {
+        let scale = limit / len2.sqrt();
+        (outside.select(j1 * scale, j1), outside.select(j2 * scale, j2))
+    } else {
+        (j1, j2) // sticking: no root, no division
+    };
     (f.impulse[0], f.impulse[1]) = (j1.to_array(), j2.to_array());
     let g = f.g;
     e.push(&batch.tangents[0], &g[0], batch, j1 - old1);
@@ -486,7 +495,7 @@ pub fn restitution<B: BodyStore + ?Sized>(
                 [p, q] => {
                     let ((bp, rp), (bq, rq)) = (bounce(p), bounce(q));
                     let (u, v) = (e.normal_speed(&p.g), e.normal_speed(&q.g));
-                    let (both_p, both_q) = block(&rp, &rq, u, v, ld(&p.coupling));
+                    let (both_p, both_q) = block(&rp, &rq, u, v, (ld(&p.coupling), ld(&p.inv_det)));
                     let both = bp & bq;
                     let new_p = both.select(both_p, bp.select(rp.single(u), rp.impulse));
                     let new_q = both.select(both_q, bq.select(rq.single(v), rq.impulse));
