@@ -202,9 +202,10 @@ pub struct ContactPoint {
     /// For the first point of a pair (0 of 0–1, 2 of 2–3), the off-diagonal K₀₁ of the pair's
     /// effective-mass matrix, m_a⁻¹ + m_b⁻¹ + g_a·g'_a + g_b·g'_b [1/kg]; else 0.
     pub coupling: Scalar,
-    /// For the first point of a pair, 1 / det K of the pair held rigidly, K₀₀ K₁₁ − K₀₁²
-    /// [kg²] (what the block solve divides by when neither row is soft); else 0.
-    pub inv_det: Scalar,
+    /// For the first point of a pair, 1 / det K of the pair held rigidly, K₀₀ K₁₁ − K₀₁², and
+    /// with both rows soft, (K₀₀ + C₀)(K₁₁ + C₁) − K₀₁² [kg²]: what the block solve divides by
+    /// (`Softness::compliance`); else 0.
+    pub inv_det: [Scalar; 2],
 }
 
 impl ContactPoint {
@@ -219,7 +220,7 @@ impl ContactPoint {
         max_impulse: 0.0,
         lever: 0.0,
         coupling: 0.0,
-        inv_det: 0.0,
+        inv_det: [0.0; 2],
     };
 }
 

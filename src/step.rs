@@ -93,6 +93,12 @@ impl Params {
         out.extend((0..b.len()).map(|i| self.speculative_distance(dt, b, i)));
     }
 
+    /// The length of a substep of `solve` [s] for a step of `dt`.
+    #[must_use]
+    pub fn substep(&self, dt: Scalar) -> Scalar {
+        dt / Scalar::from(self.substeps.max(1))
+    }
+
     /// Solve sweeps in substep `k` (0-based): `iterations` in the first half, one after. The
     /// later substeps start from the earlier ones' impulses, near the solution, and one sweep
     /// holds them: on a 40-row pyramid 2, 2, 1, 1 stands as well as 2, 2, 2, 2 (4.6 cm against

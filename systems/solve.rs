@@ -197,8 +197,7 @@ fn placed(g: &Geometry, b: &Bodies, ia: usize, ib: usize) -> Manifold {
 /// stack's weight is carried substep by substep.
 fn substeps(ctx: &mut StepContext) {
     let (params, dt) = (&ctx.params, ctx.dt);
-    let count = params.substeps.max(1);
-    let h = dt / Scalar::from(count);
+    let (count, h) = (params.substeps.max(1), params.substep(dt));
     let soft = Softness::new(h);
     let s = &mut ctx.scratch.solve;
     let mut plan = vec![Step::Push(-params.gravity * dt)];

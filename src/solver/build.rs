@@ -136,6 +136,7 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
     // before integrating forces).
     let before = |i: usize| b.velocity[i] - if b.is_fixed(i) { Vector::ZERO } else { params.gravity * dt };
+    let compliance = super::Softness::new(params.substep(dt)).compliance;
     for (held, &slot) in sh.held.iter().filter(|h| h.group == which).zip(slots.iter()) {
         let (k, lane) = (held.pair, held.lane);
         let (pair, m) = (&sh.pairs[k as usize], &sh.manifolds[k as usize]);
@@ -179,7 +180,7 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
                 max_impulse: 0.0,
                 lever: (p - centre).length(),
                 coupling: 0.0,
-                inv_det: 0.0,
+                inv_det: [0.0; 2],
             };
         }
         // Each pair of points' coupling (`solver::ContactPoint::coupling`).
@@ -187,7 +188,10 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
             let (p, q) = (&rows[j], &rows[j + 1]);
             let coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
             // Once a step here, not in every sweep: the kernel's division is its slowest step.
-            rows[j].inv_det = 1.0 / (p.k * q.k - coupling * coupling);
+            // The same arithmetic as the kernel's (a rigid row's compliance term is zero).
+            let soft = |k: Scalar| k + compliance * k;
+            let det = [p.k * q.k - coupling * coupling, soft(p.k) * soft(q.k) - coupling * coupling];
+            rows[j].inv_det = det.map(|d| 1.0 / d);
             rows[j].coupling = coupling;
         }
         for (j, row) in rows[..m.len].iter().enumerate() {

@@ -260,7 +260,7 @@ fn normal_pair(e: &mut Ends, m: &Motion, batch: &Batch, pair: &mut [PointRows], 
             let (rp, rq) =
                 (Rows::new(p, m.gap(&p.g, &p.gap), batch, h, soft), Rows::new(q, m.gap(&q.g, &q.gap), batch, h, soft));
             let (up, uq) = (e.normal_speed(&p.g), e.normal_speed(&q.g));
-            let (new_p, new_q) = block(&rp, &rq, up, uq, (ld(&p.coupling), ld(&p.inv_det)));
+            let (new_p, new_q) = block(&rp, &rq, up, uq, (ld(&p.coupling), p.inv_det.map(|d| ld(&d))));
             let (dp, dq) = (settle(p, new_p), settle(q, new_q));
             e.push_normal(&p.g, im, dp);
             e.push_normal(&q.g, im, dq);
@@ -362,7 +362,7 @@ impl Rows {
 /// and, when round-off left no case exact, one Gauss–Seidel step each; the later cases only
 /// when some lane is in none of the first three. Returns the new impulses.
 #[inline(always)]
-fn block(p: &Rows, q: &Rows, u: F, v: F, (m01, inv_rigid): (F, F)) -> (F, F) {
+fn block(p: &Rows, q: &Rows, u: F, v: F, (m01, [inv_rigid, inv_soft]): (F, [F; 2])) -> (F, F) {
     let zero = F::ZERO;
     let (l0, l1) = (p.impulse, q.impulse);
     let idle = q.mass.simd_eq(zero) | p.mass.simd_eq(zero);
@@ -371,10 +371,10 @@ fn block(p: &Rows, q: &Rows, u: F, v: F, (m01, inv_rigid): (F, F)) -> (F, F) {
     let apart = l0.simd_eq(zero) & l1.simd_eq(zero) & r0.simd_ge(zero) & r1.simd_ge(zero);
     let (m00, m11) = (p.k + cp, q.k + cq);
     let det = m00 * m11 - m01 * m01;
-    // Rigid rows (every row of a relax pass): m00, m11 are K₀₀, K₁₁ exactly, and `fill` has
-    // divided already, by the same numbers.
-    let rigid = (p.compliance.simd_eq(zero) & q.compliance.simd_eq(zero)).all();
-    let inv = if rigid { inv_rigid } else { F::ONE / det };
+    // Both rows rigid (every row of a relax pass) or both soft: `fill` has divided already, by
+    // the same numbers. Only a lane with one row of each divides here.
+    let (soft_p, soft_q) = (!p.compliance.simd_eq(zero), !q.compliance.simd_eq(zero));
+    let inv = if (soft_p ^ soft_q).any() { F::ONE / det } else { soft_p.select(inv_soft, inv_rigid) };
     let (both0, both1) = (l0 - (m11 * r0 - m01 * r1) * inv, l1 - (m00 * r1 - m01 * r0) * inv);
     let both = det.simd_gt(F::splat(1e-9) * m00 * m11) & both0.simd_ge(zero) & both1.simd_ge(zero);
     // The cases of a resting or separating manifold; the others only where a lane needs them.
@@ -495,7 +495,7 @@ pub fn restitution<B: BodyStore + ?Sized>(
                 [p, q] => {
                     let ((bp, rp), (bq, rq)) = (bounce(p), bounce(q));
                     let (u, v) = (e.normal_speed(&p.g), e.normal_speed(&q.g));
-                    let (both_p, both_q) = block(&rp, &rq, u, v, (ld(&p.coupling), ld(&p.inv_det)));
+                    let (both_p, both_q) = block(&rp, &rq, u, v, (ld(&p.coupling), p.inv_det.map(|d| ld(&d))));
                     let both = bp & bq;
                     let new_p = both.select(both_p, bp.select(rp.single(u), rp.impulse));
                     let new_q = both.select(both_q, bq.select(rq.single(v), rq.impulse));

@@ -152,8 +152,8 @@ pub struct PointRows {
     pub lever: Lanes,
     /// K₀₁ with the next point, for the first of a pair [1/kg].
     pub coupling: Lanes,
-    /// 1 / det K of the pair held rigidly, for the first of a pair [kg²].
-    pub inv_det: Lanes,
+    /// 1 / det K of the pair held rigidly and soft, for the first of a pair [kg²].
+    pub inv_det: [Lanes; 2],
 }
 
 impl PointRows {
@@ -169,7 +169,7 @@ impl PointRows {
         self.max_impulse[l] = p.max_impulse;
         self.lever[l] = p.lever;
         self.coupling[l] = p.coupling;
-        self.inv_det[l] = p.inv_det;
+        (self.inv_det[0][l], self.inv_det[1][l]) = (p.inv_det[0], p.inv_det[1]);
     }
 
     /// Lane `l`'s point.
@@ -185,7 +185,7 @@ impl PointRows {
             max_impulse: self.max_impulse[l],
             lever: self.lever[l],
             coupling: self.coupling[l],
-            inv_det: self.inv_det[l],
+            inv_det: [self.inv_det[0][l], self.inv_det[1][l]],
         }
     }
 }
