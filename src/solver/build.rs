@@ -90,7 +90,8 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         group.points.clear();
         group.points.resize(first as usize, PointRows::default());
     }
-    // The two sides' groups filled at once (they write disjoint batches), then the third.
+    // The two sides' groups filled at once (they write disjoint batches), the third beside the
+    // first: the thread that handed the second side on has a wake-up's head start.
     let SolveScratch { groups, held, pairs, manifolds, slot, scale, cache, cached, geometry, recycled, .. } = s;
     let shared = Shared {
         b,
@@ -108,7 +109,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         recycled,
     };
     let [first, second, across] = groups;
-    rayon::join(|| fill(&shared, 0, first), || (fill(&shared, 1, second), fill(&shared, 2, across)));
+    rayon::join(|| (fill(&shared, 0, first), fill(&shared, 2, across)), || fill(&shared, 1, second));
 }
 
 /// What `fill` reads.
