@@ -156,12 +156,12 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
         // The friction patch's centre: the mean of the points.
         let centre = m.points().iter().sum::<Vector>() / m.len as Scalar;
         let mut rows = [ContactPoint::IDLE; crate::manifold::MAX_POINTS];
+        let (before_a, before_b) = (before(ia), before(ib));
         for (j, (&p, &gap)) in m.points().iter().zip(&m.gaps).enumerate() {
             let r = [p - b.position[ia], p - b.position[ib]];
             let g = [scale[0] * r[0].cross(n), scale[1] * r[1].cross(n)];
             let approach =
-                (before(ia) + b.angular_velocity[ia].cross(r[0]) - before(ib) - b.angular_velocity[ib].cross(r[1]))
-                    .dot(n);
+                (before_a + b.angular_velocity[ia].cross(r[0]) - before_b - b.angular_velocity[ib].cross(r[1])).dot(n);
             // A recycled point is last step's own; a new one takes the impulse of the old
             // point at the same place on A, if any.
             let old = cached.and_then(|c| {
