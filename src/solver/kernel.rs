@@ -41,6 +41,12 @@ impl V {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
 
+    /// `self − o`.
+    #[inline(always)]
+    fn minus(self, o: Self) -> Self {
+        Self { x: self.x - o.x, y: self.y - o.y, z: self.z - o.z }
+    }
+
     /// `self += o · s`.
     #[inline(always)]
     fn add_scaled(&mut self, o: Self, s: F) {
@@ -105,8 +111,7 @@ impl Ends {
     fn open<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
         let [va, vb] = gather(bodies, batch, |b| b.v);
         let [wa, wb] = gather(bodies, batch, |b| b.w);
-        let n = V::load(&batch.normal);
-        let u = (va.x - vb.x) * n.x + (va.y - vb.y) * n.y + (va.z - vb.z) * n.z;
+        let u = va.minus(vb).dot(V::load(&batch.normal));
         Self { va, wa, vb, wb, u, held: F::ZERO }
     }
 
@@ -172,8 +177,7 @@ impl Motion {
     fn open<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
         let [xa, xb] = gather(bodies, batch, |b| b.dx);
         let [dqa, dqb] = gather(bodies, batch, |b| b.dq);
-        let n = V::load(&batch.normal);
-        let d = (xa.x - xb.x) * n.x + (xa.y - xb.y) * n.y + (xa.z - xb.z) * n.z;
+        let d = xa.minus(xb).dot(V::load(&batch.normal));
         Self { dqa, dqb, d }
     }
 
@@ -420,7 +424,7 @@ fn friction(e: &mut Ends, batch: &mut Batch, entries: &[PointRows]) {
         total += impulse;
         moment += impulse * ld(&p.lever);
     }
-    let dv = V { x: e.va.x - e.vb.x, y: e.va.y - e.vb.y, z: e.va.z - e.vb.z };
+    let dv = e.va.minus(e.vb);
     let f = &mut batch.friction;
     let mu = ld(&batch.mu);
     let (t1, t2) = (V::load(&batch.tangents[0]), V::load(&batch.tangents[1]));
