@@ -29,6 +29,9 @@ pub struct Posed {
     pub planes: Vec<Plane>,
     /// World feature-edge directions, in the mesh's order.
     pub edge_directions: Vec<Vector>,
+    /// World centroids of the triangles, in the mesh's order [m] (the face test's points:
+    /// found once per body and step, not once per pair and direction).
+    pub centroids: Vec<Vector>,
     /// World axis-aligned bounds of the vertices, (min, max) [m].
     pub bounds: (Vector, Vector),
 }
@@ -43,6 +46,7 @@ impl Posed {
             vertices: Vec::new(),
             planes: Vec::new(),
             edge_directions: Vec::new(),
+            centroids: Vec::new(),
             bounds: (Vector::ZERO, Vector::ZERO),
         };
         posed.update(pose);
@@ -65,6 +69,12 @@ impl Posed {
         }));
         self.edge_directions.clear();
         self.edge_directions.extend(self.mesh.edge_directions.iter().map(|&d| r * d));
+        self.centroids.clear();
+        let vertices = &self.vertices;
+        self.centroids.extend(self.mesh.triangles.iter().map(|t| {
+            let [p0, p1, p2] = t.map(|i| vertices[i as usize]);
+            (p0 + p1 + p2) / 3.0
+        }));
     }
 
     /// The inside tolerance for this body [m].

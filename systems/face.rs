@@ -47,10 +47,9 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option
 pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let (mut sum_point, mut count) = (Vector::ZERO, 0_u32);
     let (mut sum_normal, mut sum_area) = (Vector::ZERO, 0.0);
-    for t in &a.mesh.triangles {
-        let [p0, p1, p2] = t.map(|i| a.vertices[i as usize]);
-        let centroid = (p0 + p1 + p2) / 3.0;
+    for (t, &centroid) in a.mesh.triangles.iter().zip(&a.centroids) {
         if is_inside(b, centroid) {
+            let [p0, p1, p2] = t.map(|i| a.vertices[i as usize]);
             let area_normal = 0.5 * (p1 - p0).cross(p2 - p0);
             sum_point += centroid;
             count += 1;
