@@ -5,6 +5,8 @@
 //! operation, so the lanes and a one-by-one solve give the same bits. Where a row's case
 //! depends on its lane (speculative, pushed or rigid; which rows of a block push), every case
 //! is computed and the lane's own selected: no branch on one lane holds up the other three.
+//! The only branches ask whether any lane of the batch needs a costly step (a division, a
+//! root, a block's rarer cases) and skip it when none does.
 
 use super::lanes::{Batch, Lanes, PointRows, Wide};
 use super::{BodyStore, LANES, Softness};
