@@ -72,6 +72,7 @@ pub struct BoxPose {
 /// wide one, so a resting pair, which neither proves, is not tested twice.
 #[must_use]
 pub fn boxes_separated_by(a: &BoxPose, b: &BoxPose, [wide, proof]: [Scalar; 2]) -> [bool; 2] {
+    debug_assert!(wide >= proof, "the wide margin proves the proof margin too");
     let (ra_m, rb_m) = (a.rotation, b.rotation);
     // r[i][j] = A_i · B_j, t = centre of B in A's axes.
     let r = ra_m.transpose() * rb_m;
