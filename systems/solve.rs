@@ -227,7 +227,6 @@ fn substeps(ctx: &mut StepContext) {
 /// held (by the feature that found its contact; near pairs no test found are not counted).
 fn remember(ctx: &mut StepContext) {
     let s = &mut ctx.scratch.solve;
-    s.cache.clear();
     // In pair order, which is the cache's: each pair's held entry by its index (sorting the
     // entries themselves, 300 bytes each, cost a third of a millisecond on a 40-row pyramid).
     s.by_pair.clear();
@@ -235,15 +234,17 @@ fn remember(ctx: &mut StepContext) {
     for (h, held) in s.held.iter().enumerate() {
         s.by_pair[held.pair as usize] = h as u32;
     }
-    for &h in s.by_pair.iter().filter(|&&h| h != u32::MAX) {
-        let held = &s.held[h as usize];
-        let pair = &s.pairs[held.pair as usize];
-        let group = &s.groups[usize::from(held.group)];
+    s.by_pair.retain(|&h| h != u32::MAX);
+    // Written in parallel: a serial part of the step waits for both threads.
+    let (held, pairs, groups, geometry) = (&s.held, &s.pairs, &s.groups, &s.geometry);
+    let entry = |&h: &u32| {
+        let held = &held[h as usize];
+        let group = &groups[usize::from(held.group)];
         let (batch, lane) = (&group.batches[held.batch as usize], usize::from(held.lane));
         let [n, t1, t2] = batch.axes(lane);
         let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
         let mut entry = CachedManifold {
-            geometry: s.geometry[held.pair as usize],
+            geometry: geometry[held.pair as usize],
             tangent: t1 * j1 + t2 * j2,
             twist: n * jw,
             ..CachedManifold::default()
@@ -251,9 +252,14 @@ fn remember(ctx: &mut StepContext) {
         for j in 0..usize::from(held.len) {
             entry.normal[j] = group.points[batch.first as usize + j].impulse[lane];
         }
-        s.cache.push(((pair.a, pair.b), entry));
+        let pair = &pairs[held.pair as usize];
+        ((pair.a, pair.b), entry)
+    };
+    s.by_pair.par_iter().map(entry).collect_into_vec(&mut s.cache);
+    for (&h, (_, entry)) in s.by_pair.iter().zip(&s.cache) {
+        let k = s.held[h as usize].pair as usize;
         let pushed = entry.normal.iter().any(|&j| j > 0.0);
-        if let (Some(contact), false, true) = (pair.contact(), s.near[held.pair as usize], pushed) {
+        if let (Some(contact), false, true) = (s.pairs[k].contact(), s.near[k], pushed) {
             ctx.stats.impulses[contact.feature as usize] += 1;
         }
     }
