@@ -6,7 +6,7 @@ use crate::bodies::Bodies;
 use crate::components::Pose;
 use crate::contact::{Feature, Pair};
 use crate::geometry::Posed;
-use crate::math::{Scalar, Vector};
+use crate::math::{Quat, Scalar, Vector};
 use crate::mesh::MeshTable;
 use hecs::World;
 use rayon::prelude::*;
@@ -238,6 +238,8 @@ pub struct ConstraintGroup {
     pub placed: Vec<(u32, u8)>,
     /// Constraints per batch.
     pub fill: Vec<u8>,
+    /// Scratch of `solver::place`.
+    pub last: Vec<u32>,
     /// The batches of independent constraints, in solving order.
     pub batches: Vec<crate::solver::Batch>,
     /// Their points, lane by lane.
@@ -313,8 +315,6 @@ pub struct SolveScratch {
     /// the other, and across (see `solver::build_constraints`). The first two are solved at
     /// once on two threads, the third after them.
     pub groups: [ConstraintGroup; 3],
-    /// Scratch of `solver::place`.
-    pub last: Vec<u32>,
     /// Each pair's contact geometry (in `pairs` order), found or recycled this step.
     pub geometry: Vec<Geometry>,
     /// Whether each pair's geometry was recycled from the previous step.
@@ -332,6 +332,9 @@ pub struct SolveScratch {
     pub moving: Vec<u32>,
     /// Free bodies on the first side; solver body `left` is that side's static slot.
     pub left: usize,
+    /// Scratch: each moving body's velocity, angular velocity, position and orientation after
+    /// the substeps, found in parallel and then written to the bodies.
+    pub after: Vec<(Vector, Vector, Vector, Quat)>,
     /// Scratch: each free body's coordinate along the split, with its actor index.
     pub keys: Vec<(u64, u32)>,
     /// Each actor's solver-body slot (`u32::MAX` when not in a held pair this step; fixed

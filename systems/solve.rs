@@ -208,15 +208,20 @@ fn substeps(ctx: &mut StepContext) {
     }
     plan.push(Step::Pass(Pass::Restitution(params.restitution_threshold(dt))));
     drive(s, &plan, h);
-    let statics = [s.left, s.bodies.len() - 1];
+    // Worked out in parallel (a rotation each), then written in place.
+    let (b, left) = (&ctx.bodies, s.left);
+    let after = |(k, &i): (usize, &u32)| {
+        let (i, slot) = (i as usize, if k < left { k } else { k + 1 });
+        let (body, scale) = (&s.bodies[slot], s.scale[slot]);
+        let w = scale * body.w;
+        let turn = exp_map(scale * body.dq - w * dt);
+        (body.v, w, b.position[i] + (body.dx - body.v * dt), (turn * b.orientation[i]).normalize())
+    };
+    s.moving.par_iter().enumerate().map(after).collect_into_vec(&mut s.after);
     let b = &mut ctx.bodies;
-    let bodies = s.bodies.iter().zip(&s.scale).enumerate().filter(|(k, _)| !statics.contains(k));
-    for (&i, (_, (body, scale))) in s.moving.iter().zip(bodies) {
+    for (&i, &(v, w, x, q)) in s.moving.iter().zip(&s.after) {
         let i = i as usize;
-        b.velocity[i] = body.v;
-        b.angular_velocity[i] = *scale * body.w;
-        b.position[i] += body.dx - body.v * dt;
-        b.orientation[i] = (exp_map(*scale * body.dq - b.angular_velocity[i] * dt) * b.orientation[i]).normalize();
+        (b.velocity[i], b.angular_velocity[i], b.position[i], b.orientation[i]) = (v, w, x, q);
     }
     for k in 0..ctx.scratch.solve.moving.len() {
         ctx.mark_moved(ctx.scratch.solve.moving[k] as usize);

@@ -68,30 +68,8 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
             len: s.manifolds[k as usize].len as u8,
         });
     }
-    for group in &mut s.groups {
-        super::place(&group.slots, group.fixed, &mut s.last, &mut group.fill, &mut group.placed);
-        group.batches.clear();
-        group.batches.extend(group.fill.iter().map(|_| Batch::idle(group.fixed)));
-    }
-    let mut next = [0_usize; 3];
-    for held in &mut s.held {
-        let g = &mut s.groups[usize::from(held.group)];
-        (held.batch, held.lane) = g.placed[next[usize::from(held.group)]];
-        next[usize::from(held.group)] += 1;
-        let batch = &mut g.batches[held.batch as usize];
-        batch.len = batch.len.max(u32::from(held.len));
-    }
-    for group in &mut s.groups {
-        let mut first = 0;
-        for batch in &mut group.batches {
-            batch.first = first;
-            first += batch.len;
-        }
-        group.points.clear();
-        group.points.resize(first as usize, PointRows::default());
-    }
-    // The two sides' groups filled at once (they write disjoint batches), the third beside the
-    // first: the thread that handed the second side on has a wake-up's head start.
+    // The two sides' groups placed and filled at once (they write disjoint batches), the third
+    // beside the first.
     let SolveScratch { groups, held, pairs, manifolds, slot, scale, cache, cached, geometry, recycled, .. } = s;
     let shared = Shared {
         b,
@@ -109,7 +87,37 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         recycled,
     };
     let [first, second, across] = groups;
-    rayon::join(|| (fill(&shared, 0, first), fill(&shared, 2, across)), || fill(&shared, 1, second));
+    let build = |which: u8, group: &mut ConstraintGroup| {
+        place(held, which, group);
+        fill(&shared, which, group);
+    };
+    rayon::join(|| (build(0, first), build(2, across)), || build(1, second));
+    // Each held pair's batch and lane, for `solve::remember`.
+    let mut next = [0_usize; 3];
+    for held in held.iter_mut() {
+        let g = usize::from(held.group);
+        (held.batch, held.lane) = groups[g].placed[next[g]];
+        next[g] += 1;
+    }
+}
+
+/// Places group `which`'s constraints in batches (`solver::place`), each batch as long as its
+/// longest manifold, and makes room for their points.
+fn place(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
+    super::place(&group.slots, group.fixed, &mut group.last, &mut group.fill, &mut group.placed);
+    group.batches.clear();
+    group.batches.extend(group.fill.iter().map(|_| Batch::idle(group.fixed)));
+    for (held, &(batch, _)) in held.iter().filter(|h| h.group == which).zip(&group.placed) {
+        let batch = &mut group.batches[batch as usize];
+        batch.len = batch.len.max(u32::from(held.len));
+    }
+    let mut first = 0;
+    for batch in &mut group.batches {
+        batch.first = first;
+        first += batch.len;
+    }
+    group.points.clear();
+    group.points.resize(first as usize, PointRows::default());
 }
 
 /// What `fill` reads.
@@ -133,13 +141,14 @@ struct Shared<'a> {
 /// slots in the group's numbering are `group.slots`, in the same order).
 fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     let (b, params, dt) = (sh.b, sh.params, sh.dt);
-    let ConstraintGroup { slots, batches, points, .. } = group;
+    let ConstraintGroup { slots, placed, batches, points, .. } = group;
     // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
     // before integrating forces).
     let before = |i: usize| b.velocity[i] - if b.is_fixed(i) { Vector::ZERO } else { params.gravity * dt };
     let compliance = super::Softness::new(params.substep(dt)).compliance;
-    for (held, &slot) in sh.held.iter().filter(|h| h.group == which).zip(slots.iter()) {
-        let (k, lane) = (held.pair, held.lane);
+    let mine = sh.held.iter().filter(|h| h.group == which);
+    for ((held, &slot), &(batch, lane)) in mine.zip(slots.iter()).zip(placed.iter()) {
+        let k = held.pair;
         let (pair, m) = (&sh.pairs[k as usize], &sh.manifolds[k as usize]);
         let contact = pair.contact().expect("ordered pairs have contacts");
         let (ia, ib) = (pair.a as usize, pair.b as usize);
@@ -151,7 +160,7 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
         let cached = (sh.cached[k as usize] != u32::MAX).then(|| &sh.cache[sh.cached[k as usize] as usize].1);
         let mu = b.pair_friction(ia, ib);
         let (geometry, recycled) = (&sh.geometry[k as usize], sh.recycled[k as usize]);
-        let into = &mut batches[held.batch as usize];
+        let into = &mut batches[batch as usize];
         let first = into.first as usize;
         // The friction patch's centre: the mean of the points.
         let centre = m.points().iter().sum::<Vector>() / m.len as Scalar;
