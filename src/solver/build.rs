@@ -282,7 +282,8 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
     s.slot.resize(b.len(), u32::MAX);
     s.moving.clear();
     // Each free end once, marked in `slot` (a body fixed last step, asleep say, may still
-    // hold the static slot there, so the mark is a value no slot takes), then in index order.
+    // hold the static slot there, so the mark is a value no slot takes). Their numbering
+    // changes no result (it only tells bodies apart), so it is the order they come in.
     const MARKED: u32 = u32::MAX - 1;
     for &(_, k) in &s.order {
         for i in [s.pairs[k as usize].a, s.pairs[k as usize].b] {
@@ -292,7 +293,6 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
             }
         }
     }
-    s.moving.sort_unstable();
     s.left = s.moving.len();
     if s.order.len() >= SPLIT_MIN {
         // The horizontal axis (across gravity) along which the bodies spread widest.
@@ -304,10 +304,12 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
         let axis = if spread(Vector::X) >= spread(Vector::Z) { Vector::X } else { Vector::Z };
         s.keys.clear();
         s.keys.extend(s.moving.iter().map(|&i| (total_order_key(b.position[i as usize].dot(axis)), i)));
-        s.keys.sort_unstable();
+        // Only which side each body is on matters (a side's numbering changes no result), so
+        // a partition at the median will do, with no sort.
+        s.left = s.moving.len() / 2;
+        s.keys.select_nth_unstable(s.left);
         s.moving.clear();
         s.moving.extend(s.keys.iter().map(|k| k.1));
-        s.left = s.moving.len() / 2;
     }
     let (left, last) = (s.left as u32, s.moving.len() as u32 + 1);
     for (k, &i) in s.moving.iter().enumerate() {
