@@ -60,3 +60,28 @@ fn a_pyramid_solved_in_two_sides_is_bit_identical_on_one_thread_or_two() {
     };
     assert_eq!(run(1), run(2));
 }
+
+#[test]
+fn pyramids_stepped_side_by_side_in_one_pool_match_each_alone() {
+    // A user may step several sims at once in one pool's parallel loop: each still gives its
+    // own bits, and none waits for ever on the threads another step keeps awake.
+    let pyramid = || rigid_sandbox::bench::scene_sim(rigid_sandbox::bench::BenchScene::Pyramid, 20, 1);
+    let alone = {
+        let mut sim = pyramid();
+        sim.run(15).expect("finite");
+        state_hash(&sim.actors())
+    };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("pool");
+    let hashes: Vec<u64> = pool.install(|| {
+        use rayon::prelude::*;
+        (0..4)
+            .into_par_iter()
+            .map(|_| {
+                let mut sim = pyramid();
+                sim.run(15).expect("finite");
+                state_hash(&sim.actors())
+            })
+            .collect()
+    });
+    assert_eq!(hashes, [alone; 4]);
+}
