@@ -148,12 +148,12 @@ impl Schedule {
 /// a pool, or in a pool of one, `f` runs plainly. The results never depend on it: it changes
 /// only who runs the parallel parts, and no part's arithmetic depends on that.
 ///
-///
 /// A thread stays only while work keeps coming: after `MAX_IDLE` without any it goes back to
 /// rayon's own sleep. That bounds the wait where the pool does more than one step (a user
 /// stepping several sims in a parallel loop): there a thread may take up the spinning job in
-/// the middle of work the stepping thread waits for, and would otherwise spin for ever. For
-/// the same reason only one step at a time keeps the pool awake; others run plainly.
+/// the middle of work the stepping thread waits for, and would otherwise spin for ever. To
+/// make such waits rarer, one step at a time in the process keeps threads awake; steps that
+/// overlap it run plainly.
 fn with_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     static KEEPING_AWAKE: AtomicBool = AtomicBool::new(false);
     let Some(me) = rayon::current_thread_index() else { return f() };
@@ -246,8 +246,8 @@ mod tests {
 
     #[test]
     fn steps_run_side_by_side_in_one_pool_finish() {
-        // Each item stands for a step of its own sim; before only one kept the pool awake,
-        // this hung about one run in twenty.
+        // Each item stands for a step of its own sim. Before a kept-awake thread gave up
+        // after `MAX_IDLE` without work, this hung about one run in twenty.
         let work = |k: u64| (0..2000_u64).map(|x| x ^ k).sum::<u64>();
         let total: u64 = pool(2).install(|| {
             (0..64_u64)

@@ -321,7 +321,7 @@ pub struct SolveScratch {
     pub recycled: Vec<bool>,
     /// Each pair's index in `cache` (`u32::MAX` for none).
     pub cached: Vec<u32>,
-    /// Scratch: each pair's held index (`u32::MAX` for a pair not held).
+    /// Scratch of `solve::remember`: the held pairs' indices into `held`, in pair order.
     pub by_pair: Vec<u32>,
     /// Last step's geometry and impulses by pair, in pair order (found through `cached`).
     pub cache: Vec<((u32, u32), CachedManifold)>,
