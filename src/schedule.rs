@@ -179,7 +179,7 @@ fn with_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
                 // Spin through a short gap; past it, offer the core to the system at every
                 // round (a syscall of about a microsecond when nothing else is waiting): on a
                 // machine busy with other work, a thread spinning while the stepping thread
-                // waits for a core slowed a 40-row pyramid nearly threefold.
+                // waits for a core slowed a 40-row pyramid two to four times over.
                 if idle_rounds < SPIN_ROUNDS {
                     std::hint::spin_loop();
                 } else {
