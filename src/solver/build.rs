@@ -88,7 +88,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     };
     let [first, second, across] = groups;
     let build = |which: u8, group: &mut ConstraintGroup| {
-        place(held, which, group);
+        place_group(held, which, group);
         fill(&shared, which, group);
     };
     rayon::join(|| (build(0, first), build(2, across)), || build(1, second));
@@ -103,7 +103,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
 
 /// Places group `which`'s constraints in batches (`solver::place`), each batch as long as its
 /// longest manifold, and makes room for their points.
-fn place(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
+fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
     super::place(&group.slots, group.fixed, &mut group.last, &mut group.fill, &mut group.placed);
     group.batches.clear();
     group.batches.extend(group.fill.iter().map(|_| Batch::idle(group.fixed)));
