@@ -7,7 +7,7 @@ fn step(c: &mut Criterion) {
     let mut group = c.benchmark_group("step/box-gas");
     group.sample_size(10);
     for n in [1000_u32, 4000, 16000] {
-        let mut sim = rigid_sandbox::bench::box_gas_sim(n, 1);
+        let mut sim = rigid_sandbox::scene::benchmarks::box_gas_sim(n, 1);
         sim.run(20).expect("finite"); // untimed warm-up, as in BENCHMARKS.md
         group.throughput(Throughput::Elements(u64::from(n)));
         group.bench_function(BenchmarkId::from_parameter(n), |b| b.iter(|| sim.step().expect("finite")));
@@ -20,7 +20,8 @@ fn pyramid(c: &mut Criterion) {
     let mut group = c.benchmark_group("step/pyramid");
     group.sample_size(10);
     for base in [10_u32, 20, 40] {
-        let mut sim = rigid_sandbox::bench::scene_sim(rigid_sandbox::bench::BenchScene::Pyramid, base, 1);
+        let mut sim =
+            rigid_sandbox::scene::benchmarks::scene_sim(rigid_sandbox::scene::benchmarks::BenchScene::Pyramid, base, 1);
         sim.run(60).expect("finite"); // settled
         group.throughput(Throughput::Elements(u64::from(base * (base + 1) / 2)));
         group.bench_function(BenchmarkId::from_parameter(base), |b| b.iter(|| sim.step().expect("finite")));

@@ -3,14 +3,14 @@
 //! `cargo run --release --example custom_system`.
 
 use rigid_sandbox::math::Vector;
-use rigid_sandbox::{StepContext, System, app, build};
+use rigid_sandbox::{StepContext, System, cli, scene};
 
 /// Wind acceleration [m/s²].
 const WIND: Vector = Vector::new(0.0, 0.0, 0.5);
 
-/// Adds `WIND · dt` to every free body's velocity, then writes the rows back to the world, as
-/// every system that changes state does (DESIGN.md §3).
-fn wind(world: &mut hecs::World, ctx: &mut StepContext) {
+/// Adds `WIND · dt` to every free body's velocity. Systems change `ctx.bodies`, the step's
+/// arrays; the step writes them to the world once, at its end.
+fn wind(_world: &mut hecs::World, ctx: &mut StepContext) {
     let dt = ctx.dt;
     let b = &mut ctx.bodies;
     for i in 0..b.len() {
@@ -18,12 +18,11 @@ fn wind(world: &mut hecs::World, ctx: &mut StepContext) {
             b.velocity[i] += WIND * dt;
         }
     }
-    b.store(world);
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let (scene, path) = app::load_scene(None)?; // the built-in demo
-    let mut sim = build::build(&scene, &path)?;
+    let (scene, path) = cli::load_scene(None)?; // the built-in demo
+    let mut sim = scene::build(&scene, &path)?;
     sim.schedule.insert_before("integrate", System { name: "wind", run: wind })?;
     println!("schedule: {}", sim.schedule.names().join(" → "));
     sim.run(100)?;

@@ -16,7 +16,7 @@
 //! 10. `integrate` — poses advance.
 //!
 //! ```
-//! use rigid_sandbox::{build, scene};
+//! use rigid_sandbox::scene;
 //! // PHYSICS.md §4 (a): two unit cubes head-on, e = 1: they exchange velocities.
 //! let text = r#"Scene(dt: 0.01, gravity: (0.0, 0.0, 0.0), actors: [
 //!     Actor(name: "a", shape: Box(size: (1.0, 1.0, 1.0)), mass: 1.0, restitution: 1.0,
@@ -24,12 +24,12 @@
 //!     Actor(name: "b", shape: Box(size: (1.0, 1.0, 1.0)), mass: 1.0, restitution: 1.0),
 //! ])"#;
 //! let path = std::path::Path::new("inline.ron");
-//! let mut sim = build::build(&scene::parse(text, path)?, path)?;
+//! let mut sim = scene::build(&scene::parse(text, path)?, path)?;
 //! sim.run(20)?;
 //! let actors = sim.actors();
 //! assert_eq!(actors[0].velocity.linear.x, 0.0);
 //! assert_eq!(actors[1].velocity.linear.x, 1.0);
-//! assert_eq!(sim.contacts, [1, 0, 0]); // one impulse, found by the face test
+//! assert_eq!(sim.impulses, [1, 0, 0]); // one impulse, found by the face test
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![warn(missing_docs)]
@@ -38,48 +38,29 @@
 // of a failed command, so their size costs nothing where it matters.
 #![allow(clippy::result_large_err)]
 
-pub mod app;
-pub mod bench;
-pub mod bodies;
-pub mod build;
 pub mod cli;
-pub mod components;
-pub mod contact;
+pub mod collision;
 pub mod error;
-pub mod export;
-pub mod geometry;
-pub mod manifold;
-pub mod mass;
+pub mod io;
 pub mod math;
-pub mod mesh;
-pub mod obj;
-pub mod output;
-pub mod plot;
-pub mod render;
+pub mod model;
 pub mod rng;
 pub mod scene;
-pub mod schedule;
-pub mod shapes;
 pub mod sim;
-pub mod snapshot;
 pub mod solver;
-pub mod spawners;
-pub mod stacks;
-pub mod step;
-pub mod warnings;
 
 /// The pipeline's stages, one file each, kept in the top-level `systems/` folder.
-// The crate's only `#[path]`: see DESIGN.md §2 before adding another.
+// The crate's only `#[path]`: the design card keeps `systems/` beside `src/` (ARCHITECTURE.md).
 #[path = "../systems/mod.rs"]
 pub mod systems;
 
-pub use components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Name, Pose, Velocity};
-pub use contact::{Contact, Feature, Pair, PairState};
-pub use geometry::Posed;
-pub use mesh::{ConvexMesh, MeshId, MeshTable};
-pub use schedule::{Schedule, StepProfile, System, SystemFn};
+pub use collision::contact::{Contact, Feature, Pair, PairState};
+pub use collision::posed::Posed;
+pub use model::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Name, Pose, Velocity};
+pub use model::mesh::{ConvexMesh, MeshId, MeshTable};
 pub use sim::Sim;
-pub use step::{Params, StepContext};
+pub use sim::context::{Params, StepContext};
+pub use sim::schedule::{Schedule, StepProfile, System, SystemFn};
 
 /// The README's examples compile and run as doc-tests, so a stale example fails `cargo test`.
 #[cfg(doctest)]

@@ -1,8 +1,10 @@
 //! `correct`: positional correction of penetration (PHYSICS.md §2.6, erratum E14). Moves
 //! positions only: velocities, momentum and kinetic energy are untouched.
 
+use crate::collision::contact::Pair;
 use crate::math::{Scalar, Vector};
-use crate::step::{Params, StepContext};
+use crate::sim::context::{Params, StepContext};
+use crate::solver::SolveScratch;
 use hecs::World;
 
 /// How far to push a pair apart along its normal [m]:
@@ -18,25 +20,24 @@ pub fn correction(depth: Scalar, thickness: Scalar, params: &Params) -> Scalar {
 /// conservation tests measure before it or remove it (`Schedule::remove("correct")`).
 ///
 /// - Reads: `ctx.pairs` (`Found`, `Resolved`), `ctx.bodies`, `ctx.meshes`.
-/// - Writes: `ctx.bodies` positions (and the world's); marks moved bodies for re-posing.
+/// - Writes: `ctx.bodies` positions; marks moved bodies for re-posing.
 /// - Paper: none (the paper leaves overlaps in place: E14); PHYSICS.md §2.6.
 /// - Cost: O(C) for C contacts.
-pub fn correct(world: &mut World, ctx: &mut StepContext) {
-    let held = ctx.scratch.solve.step == ctx.step && !ctx.scratch.solve.held.is_empty();
-    let mut moved = false;
+pub fn correct(_world: &mut World, ctx: &mut StepContext) {
+    // The pairs `solve` held this step: its soft contacts push their penetration out.
+    let solved: &[Pair] = match ctx.scratch.get::<SolveScratch>() {
+        Some(s) if s.step == ctx.step && !s.held.is_empty() => &s.pairs,
+        _ => &[],
+    };
     // `solve`'s pairs are a subset of these in the same (pair) order: one walk finds them.
     let mut next_held = 0;
-    for k in 0..ctx.pairs.len() {
-        let pair = ctx.pairs[k];
+    for pair in &ctx.pairs {
         let Some(contact) = pair.contact() else { continue };
-        if held {
-            let solved = &ctx.scratch.solve.pairs;
-            while next_held < solved.len() && (solved[next_held].a, solved[next_held].b) < (pair.a, pair.b) {
-                next_held += 1;
-            }
-            if next_held < solved.len() && (solved[next_held].a, solved[next_held].b) == (pair.a, pair.b) {
-                continue; // held by `solve`, whose soft contacts push penetration out
-            }
+        while next_held < solved.len() && (solved[next_held].a, solved[next_held].b) < (pair.a, pair.b) {
+            next_held += 1;
+        }
+        if next_held < solved.len() && (solved[next_held].a, solved[next_held].b) == (pair.a, pair.b) {
+            continue;
         }
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let b = &ctx.bodies;
@@ -49,12 +50,8 @@ pub fn correct(world: &mut World, ctx: &mut StepContext) {
         let shift: Vector = contact.normal * (c / (wa + wb));
         ctx.bodies.position[ia] += shift * wa;
         ctx.bodies.position[ib] -= shift * wb;
-        ctx.mark_moved(ia);
-        ctx.mark_moved(ib);
-        moved = true;
-    }
-    if moved {
-        ctx.bodies.store(world);
+        ctx.posed.mark_moved(ia);
+        ctx.posed.mark_moved(ib);
     }
 }
 

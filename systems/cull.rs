@@ -3,9 +3,9 @@
 //! list: `cull_all_pairs`, the paper's O(N²) loop kept as the reference, and `cull`, a uniform
 //! grid, near-linear in N.
 
-use crate::contact::Pair;
+use crate::collision::contact::Pair;
 use crate::math::{Scalar, Vector};
-use crate::step::{CellEntry, CullScratch, StepContext};
+use crate::sim::context::StepContext;
 use hecs::World;
 use rayon::prelude::*;
 
@@ -24,7 +24,7 @@ pub fn spheres_overlap(xa: Vector, ra: Scalar, xb: Vector, rb: Scalar) -> bool {
 /// - Paper: bounding box check; PHYSICS.md §1.2, E1. Cost: O(N²).
 pub fn cull_all_pairs(_world: &mut World, ctx: &mut StepContext) {
     reach(ctx);
-    let (b, reach) = (&ctx.bodies, &ctx.scratch.cull.reach);
+    let (b, reach) = (&ctx.bodies, &ctx.scratch.get_mut::<CullScratch>().reach);
     for i in 0..b.len() {
         for j in i + 1..b.len() {
             if !(b.is_fixed(i) && b.is_fixed(j)) && spheres_overlap(b.position[i], reach[i], b.position[j], reach[j]) {
@@ -35,12 +35,12 @@ pub fn cull_all_pairs(_world: &mut World, ctx: &mut StepContext) {
     ctx.stats.candidates = ctx.pairs.len();
 }
 
-/// Fills `ctx.scratch.cull.reach`: each bounding radius widened by the body's speculative
+/// Fills `CullScratch::reach`: each bounding radius widened by the body's speculative
 /// distance (`Params::speculative_distance`; zero without gravity and friction, so the paper's
 /// frictionless scenes see the paper's spheres).
 fn reach(ctx: &mut StepContext) {
     let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
-    let reach = &mut ctx.scratch.cull.reach;
+    let reach = &mut ctx.scratch.get_mut::<CullScratch>().reach;
     reach.clear();
     reach.extend((0..b.len()).map(|i| b.radius[i] + params.speculative_distance(dt, b, i)));
 }
@@ -59,14 +59,14 @@ const CHUNK: usize = 256;
 /// Uniform-grid broad phase, the default: the same pairs, in the same order, as
 /// `cull_all_pairs`.
 ///
-/// - Reads: `ctx.bodies`. Writes: `ctx.pairs`, `ctx.stats`, `ctx.scratch.cull`.
+/// - Reads: `ctx.bodies`. Writes: `ctx.pairs`, `ctx.stats`, its `CullScratch`.
 /// - Paper: bounding box check (its all-pairs loop replaced; DESIGN.md §6 says why a grid and
 ///   not sweep-and-prune: box-gas's slabs of equal cubes overlap on any one axis).
 /// - Cost: O(N) to bin, O(N·k) for k neighbours per body, plus O(N·L) for L large bodies.
 pub fn cull(_world: &mut World, ctx: &mut StepContext) {
     let n = ctx.bodies.len();
     reach(ctx);
-    let s = &mut ctx.scratch.cull;
+    let s = ctx.scratch.get_mut::<CullScratch>();
     let b = &ctx.bodies;
     let reach = std::mem::take(&mut s.reach);
     let threshold = large_threshold(&reach, &mut s.radii);
@@ -115,7 +115,7 @@ struct Grid {
 }
 
 impl Grid {
-    fn build(b: &crate::bodies::Bodies, radius: &[Scalar], threshold: Scalar, s: &mut CullScratch) -> Self {
+    fn build(b: &crate::sim::bodies::Bodies, radius: &[Scalar], threshold: Scalar, s: &mut CullScratch) -> Self {
         let ordinary = || (0..b.len()).filter(|&i| radius[i] <= threshold);
         let (mut lo, mut hi, mut r_max) =
             (Vector::splat(Scalar::INFINITY), Vector::splat(Scalar::NEG_INFINITY), 0.0_f64);
@@ -176,7 +176,7 @@ impl Grid {
     fn pairs_of(
         &self,
         i: usize,
-        b: &crate::bodies::Bodies,
+        b: &crate::sim::bodies::Bodies,
         radius: &[Scalar],
         (start, order): (&[u32], &[CellEntry]),
         large: &[u32],
@@ -210,6 +210,43 @@ impl Grid {
             consider_row(j as usize, out);
         }
     }
+}
+
+/// One body in the grid's cell-sorted list.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CellEntry {
+    /// Centre [m].
+    pub position: Vector,
+    /// Bounding radius [m].
+    pub radius: Scalar,
+    /// Actor index.
+    pub index: u32,
+    /// Fixed actor.
+    pub fixed: bool,
+}
+
+/// Reused buffers of the grid broad phase (`cull`).
+#[derive(Clone, Debug, Default)]
+pub struct CullScratch {
+    /// Each body's bounding radius widened by its speculative distance [m]
+    /// (`Params::speculative_distance`).
+    pub reach: Vec<Scalar>,
+    /// Copy of the radii for the median.
+    pub radii: Vec<Scalar>,
+    /// Bodies too large for the grid.
+    pub large: Vec<u32>,
+    /// Cell of each body (`u32::MAX` for large ones).
+    pub cell_of: Vec<u32>,
+    /// Prefix sums: bodies of cell c are `order[cell_start[c]..cell_start[c + 1]]`.
+    pub cell_start: Vec<u32>,
+    /// Fill cursors while binning.
+    pub fill: Vec<u32>,
+    /// Bodies sorted by cell, with what the sphere test reads, so a neighbour scan reads one
+    /// contiguous run instead of three scattered arrays.
+    pub order: Vec<CellEntry>,
+    /// Pairs (a, b) found per chunk of bodies, concatenated in order; 8 bytes each, not a
+    /// whole `Pair`, because at 64 000 cubes they are 270 000 and memory traffic dominates.
+    pub chunks: Vec<Vec<(u32, u32)>>,
 }
 
 #[cfg(test)]

@@ -1,10 +1,10 @@
 //! `edge`: the paper's edge test. An edge of one body crossing the other
 //! (PHYSICS.md §1.5, erratum E4).
 
-use crate::contact::{Contact, Feature};
-use crate::geometry::{Posed, clip_segment, depth_along};
+use crate::collision::contact::{Contact, Feature};
+use crate::collision::posed::{Posed, clip_segment, depth_along};
 use crate::math::Scalar;
-use crate::step::StepContext;
+use crate::sim::context::StepContext;
 use hecs::World;
 
 /// Smallest |n_in × n_out| (unit normals) taken as two distinct planes; below it the edge
@@ -69,9 +69,9 @@ pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::components::Pose;
     use crate::math::{Vector, from_euler_degrees};
-    use crate::mesh::ConvexMesh;
+    use crate::model::components::Pose;
+    use crate::model::mesh::ConvexMesh;
     use std::sync::Arc;
 
     fn cube(x: Vector, degrees: Vector) -> Posed {

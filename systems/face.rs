@@ -1,10 +1,10 @@
 //! `face`: the paper's face test. Triangle centroids of one body inside the other
 //! (PHYSICS.md §1.3, errata E2 and E3).
 
-use crate::contact::{Contact, Feature, PairState};
-use crate::geometry::{Posed, depth_along, is_inside};
+use crate::collision::contact::{Contact, Feature, PairState};
+use crate::collision::posed::{Posed, depth_along, is_inside};
 use crate::math::{Scalar, Vector};
-use crate::step::StepContext;
+use crate::sim::context::StepContext;
 use hecs::World;
 use rayon::prelude::*;
 
@@ -72,8 +72,8 @@ pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::components::Pose;
-    use crate::mesh::ConvexMesh;
+    use crate::model::components::Pose;
+    use crate::model::mesh::ConvexMesh;
     use std::sync::Arc;
 
     fn cube(size: Vector, x: Vector) -> Posed {

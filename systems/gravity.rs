@@ -3,16 +3,16 @@
 //! x += v·dt in `integrate`). Applied after the contacts, a resting body would sink g·dt² every
 //! step and be pushed back, never at rest.
 
-use crate::step::StepContext;
+use crate::sim::context::StepContext;
 use hecs::World;
 
 /// Adds `gravity · dt` to every free body's velocity.
 ///
 /// - Reads: `ctx.params.gravity`, `ctx.dt`, `ctx.bodies`.
-/// - Writes: `ctx.bodies` velocities (and the world's).
+/// - Writes: `ctx.bodies` velocities.
 /// - Paper: none (the paper has no forces); PHYSICS.md §2.7, linear part.
 /// - Cost: O(N).
-pub fn gravity(world: &mut World, ctx: &mut StepContext) {
+pub fn gravity(_world: &mut World, ctx: &mut StepContext) {
     let dv = ctx.params.gravity * ctx.dt;
     if dv == crate::math::Vector::ZERO {
         return;
@@ -23,5 +23,4 @@ pub fn gravity(world: &mut World, ctx: &mut StepContext) {
             *v += dv;
         }
     }
-    b.store(world);
 }

@@ -8,9 +8,9 @@
 //! 0.3 %, ten times more.) The paper keeps ω constant and applies it as Euler-angle increments,
 //! which never shows the intermediate-axis flip and drifts L by 6 % (E15, E16).
 
-use crate::bodies::rotate_tensor;
 use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
-use crate::step::StepContext;
+use crate::sim::bodies::rotate_tensor;
+use crate::sim::context::StepContext;
 use hecs::World;
 use rayon::prelude::*;
 
@@ -48,11 +48,11 @@ pub fn rotate_free(q: Quat, omega: Vector, axes: Quat, moments: Vector, dt: Scal
 /// Advances every non-fixed body; fixed bodies never move.
 ///
 /// - Reads: `ctx.bodies`, `ctx.dt`.
-/// - Writes: `ctx.bodies` poses, velocities, world inverse inertia (and the world's); marks
+/// - Writes: `ctx.bodies` poses, velocities, world inverse inertia; marks
 ///   every body for re-posing.
 /// - Paper: integration; PHYSICS.md §2.7, errata E15, E16.
 /// - Cost: O(N), in parallel, each row written by one thread.
-pub fn integrate(world: &mut World, ctx: &mut StepContext) {
+pub fn integrate(_world: &mut World, ctx: &mut StepContext) {
     let dt = ctx.dt;
     let b = &mut ctx.bodies;
     let rows = b.position.par_iter_mut().zip(b.orientation.par_iter_mut()).zip(b.velocity.par_iter());
@@ -70,7 +70,6 @@ pub fn integrate(world: &mut World, ctx: &mut StepContext) {
     for i in 0..ctx.bodies.len() {
         ctx.mark_moved(i);
     }
-    ctx.bodies.store(world);
 }
 
 #[cfg(test)]

@@ -43,7 +43,7 @@ pub use solve::solve;
 pub use vertex::{vertex, vertex_contact};
 
 use crate::error::ScheduleError;
-use crate::schedule::{Schedule, System};
+use crate::sim::schedule::{Schedule, System};
 
 /// Every shipped system, by name. `find` looks them up; a scene's `schedule` and the CLI's
 /// `--schedule` name them.

@@ -2,13 +2,13 @@
 //! early-out that keeps the paper's three tests as the deciders of every contact, because none
 //! of them can fire on a pair it removes (proof on `separated`).
 
-use crate::bodies::Bodies;
-use crate::contact::{Pair, PairState};
-use crate::geometry::Posed;
+use crate::collision::contact::{Pair, PairState};
+use crate::collision::posed::Posed;
 use crate::math::{Mat3, Scalar, Vector};
-use crate::mesh::MeshTable;
-use crate::step::Params;
-use crate::step::StepContext;
+use crate::model::mesh::MeshTable;
+use crate::sim::bodies::Bodies;
+use crate::sim::context::Params;
+use crate::sim::context::StepContext;
 use hecs::World;
 use rayon::prelude::*;
 
@@ -169,7 +169,7 @@ fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
 /// - Cost: O(1) per box pair; otherwise O(V_A + V_B) per axis tried, at most
 ///   1 + P_A + P_B + 64 axes per pair, with early exits.
 pub fn prune(_world: &mut World, ctx: &mut StepContext) {
-    let mut speculative = std::mem::take(&mut ctx.scratch.speculative);
+    let mut speculative = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().speculative);
     ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut speculative);
     let (b, meshes, params, dt) = (&ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
     let margin = |p: &Pair| pair_margin(p, b, meshes, params, (dt, &speculative));
@@ -199,15 +199,22 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         });
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
-    ctx.scratch.speculative = speculative;
+    ctx.scratch.get_mut::<PruneScratch>().speculative = speculative;
+}
+
+/// `prune`'s reused buffer: each body's speculative distance (`Params::speculative_distances`),
+/// found afresh each step.
+#[derive(Default)]
+struct PruneScratch {
+    speculative: Vec<Scalar>,
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::components::Pose;
     use crate::math::from_euler_degrees;
-    use crate::mesh::ConvexMesh;
+    use crate::model::components::Pose;
+    use crate::model::mesh::ConvexMesh;
     use std::sync::Arc;
 
     fn pose(x: Vector, degrees: Vector) -> Pose {

@@ -12,9 +12,9 @@
 //! than the restitution threshold get an impulse (zero without gravity unless a scene sets
 //! one).
 
-use crate::contact::{Contact, PairState};
+use crate::collision::contact::{Contact, PairState};
 use crate::math::{Mat3, Scalar, Vector};
-use crate::step::StepContext;
+use crate::sim::context::StepContext;
 use hecs::World;
 
 /// What the impulse needs of one body, in world frame.
@@ -77,13 +77,12 @@ pub fn collision_impulse(a: &BodyState, b: &BodyState, contact: &Contact, restit
 /// Sweeps the found contacts, applying impulses to the velocities in `ctx.bodies`.
 ///
 /// - Reads: `ctx.pairs` (`Found`, `Resolved`), `ctx.bodies`.
-/// - Writes: `ctx.bodies` velocities (and the world's), `ctx.pairs` (`Found` → `Resolved`),
+/// - Writes: `ctx.bodies` velocities, `ctx.pairs` (`Found` → `Resolved`),
 ///   `ctx.stats` (impulses by feature, sweeps).
 /// - Paper: collision resolution; PHYSICS.md §2.5, errata E9–E13.
 /// - Cost: O(C) per sweep for C contacts, at most `max_sweeps` sweeps.
-pub fn resolve(world: &mut World, ctx: &mut StepContext) {
+pub fn resolve(_world: &mut World, ctx: &mut StepContext) {
     let threshold = ctx.params.restitution_threshold(ctx.dt);
-    let mut any = false;
     for sweep in 1..=ctx.params.max_sweeps {
         let mut applied = false;
         for pair in &mut ctx.pairs {
@@ -111,19 +110,15 @@ pub fn resolve(world: &mut World, ctx: &mut StepContext) {
             applied = true;
         }
         ctx.stats.sweeps = sweep;
-        any |= applied;
         if !applied {
             break;
         }
-    }
-    if any {
-        ctx.bodies.store(world);
     }
 }
 
 /// Row `i` of the snapshot as a `BodyState`.
 #[must_use]
-pub fn state(b: &crate::bodies::Bodies, i: usize) -> BodyState {
+pub fn state(b: &crate::sim::bodies::Bodies, i: usize) -> BodyState {
     BodyState {
         position: b.position[i],
         velocity: b.velocity[i],
@@ -136,7 +131,7 @@ pub fn state(b: &crate::bodies::Bodies, i: usize) -> BodyState {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::Feature;
+    use crate::collision::contact::Feature;
 
     fn body(x: Vector, v: Vector, m: Scalar, inv_i: Mat3) -> BodyState {
         BodyState { position: x, velocity: v, angular_velocity: Vector::ZERO, inv_mass: 1.0 / m, inv_inertia: inv_i }

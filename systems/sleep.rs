@@ -5,7 +5,7 @@
 //! creep; pairs of two sleeping bodies are not even tested.
 
 use crate::math::Vector;
-use crate::step::{SleepState, StepContext};
+use crate::sim::context::{SleepState, StepContext};
 use hecs::World;
 
 /// Below this speed [m/s] (linear, and of the bounding sphere's rim) a body counts as still
@@ -24,10 +24,10 @@ pub const WAKE_SPEED: f64 = 2.0 * STILL_SPEED;
 ///
 /// - Reads: `ctx.pairs` (every pair the broad phase and `prune` kept: touching or about to),
 ///   `ctx.bodies`, `ctx.params.sleep`.
-/// - Writes: `ctx.sleep`; the velocities of bodies falling asleep (zeroed, and the world's).
+/// - Writes: `ctx.sleep`; the velocities of bodies falling asleep (zeroed).
 /// - Paper: none (the paper's bodies never come to rest).
 /// - Cost: O(N + P) for N bodies and P pairs.
-pub fn sleep(world: &mut World, ctx: &mut StepContext) {
+pub fn sleep(_world: &mut World, ctx: &mut StepContext) {
     let n = ctx.bodies.len();
     if !ctx.params.sleep {
         ctx.sleep = SleepState::default();
@@ -76,14 +76,9 @@ pub fn sleep(world: &mut World, ctx: &mut StepContext) {
             s.ready[ib] = false;
         }
     }
-    let mut slept = false;
     for i in (0..n).filter(|&i| s.ready[i]) {
         s.asleep[i] = true;
         b.velocity[i] = Vector::ZERO;
         b.angular_velocity[i] = Vector::ZERO;
-        slept = true;
-    }
-    if slept {
-        b.store(world);
     }
 }

@@ -20,12 +20,13 @@
 //! paper's frictionless results, `resolve`'s, are unchanged. `correct` leaves the pairs held
 //! here alone.
 
-use crate::bodies::Bodies;
-use crate::contact::{Contact, Feature, Pair, PairState};
-use crate::manifold::{ClipScratch, Manifold, contact_axis, manifold, support_point};
+use crate::collision::contact::{Contact, Feature, Pair, PairState};
+use crate::collision::manifold::{ClipScratch, Manifold, contact_axis, manifold, support_point};
 use crate::math::{Quat, Scalar, Vector, exp_map};
+use crate::sim::bodies::Bodies;
+use crate::sim::context::StepContext;
+use crate::solver::{CachedManifold, ContactAnchors, SolveScratch};
 use crate::solver::{Pass, Softness, Step, build_constraints, drive};
-use crate::step::{CachedManifold, Geometry, StepContext};
 use hecs::World;
 use rayon::prelude::*;
 
@@ -37,15 +38,15 @@ const RECYCLE_DISTANCE: Scalar = 0.005;
 /// Holds resting contacts, applies friction and bounces impacts (see the module docs).
 ///
 /// - Reads: `ctx.pairs` (`Candidate`, `Found`, `Resolved`), `ctx.posed`, `ctx.bodies`,
-///   `ctx.scratch.solve`.
-/// - Writes: `ctx.bodies` velocities and the poses of the bodies it holds (and the world's),
+///   its `SolveScratch`.
+/// - Writes: `ctx.bodies` velocities and the poses of the bodies it holds,
 ///   `ctx.stats.impulses` (one per pair held), the warm-start cache.
 /// - Paper: none (resting contact and friction are the paper's future work).
 /// - Cost: O(P) to find and build P points, O(P · substeps · (iterations + 2)) to solve.
-pub fn solve(world: &mut World, ctx: &mut StepContext) {
+pub fn solve(_world: &mut World, ctx: &mut StepContext) {
     let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
     let resting = |p: &Pair| params.resting_contacts(dt, b.pair_friction(p.a as usize, p.b as usize));
-    let s = &mut ctx.scratch.solve;
+    let s = ctx.scratch.get_mut::<SolveScratch>();
     s.step = ctx.step;
     s.pairs.clear();
     let open = |p: &Pair| p.contact().is_some() || p.is_candidate() || p.is_near();
@@ -58,23 +59,24 @@ pub fn solve(world: &mut World, ctx: &mut StepContext) {
     ctx.pose_pairs(open);
     find_manifolds(ctx);
     build_constraints(ctx);
+    let s = ctx.scratch.get_mut::<SolveScratch>();
+    (ctx.stats.held, ctx.stats.split) = (s.held.len(), !s.groups[1].batches.is_empty());
     substeps(ctx);
     remember(ctx);
-    ctx.bodies.store(world);
 }
 
 /// Each pair's manifold: recycled from the previous step when the two bodies have hardly
 /// moved relative to each other (`still`), else found afresh along the pair's least-overlap
 /// axis (`contact_axis`, `manifold`).
 fn find_manifolds(ctx: &mut StepContext) {
-    ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut ctx.scratch.speculative);
-    let speculative = &ctx.scratch.speculative;
-    let s = &mut ctx.scratch.solve;
+    let s = ctx.scratch.get_mut::<SolveScratch>();
+    ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut s.speculative);
+    let speculative = &s.speculative;
     let (posed, meshes, b, params) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params);
     let margin = params.contact_margin;
     let n = s.pairs.len();
     s.manifolds.resize(n, Manifold::default());
-    s.geometry.resize(n, Geometry::default());
+    s.anchors.resize(n, ContactAnchors::default());
     s.recycled.resize(n, false);
     s.near.clear();
     s.near.extend(s.pairs.iter().map(|p| p.is_candidate() || p.is_near()));
@@ -91,17 +93,17 @@ fn find_manifolds(ctx: &mut StepContext) {
     let cache = &s.cache;
     let cached = &s.cached;
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
-    let rows = rows.zip(s.geometry.par_iter_mut().zip(s.recycled.par_iter_mut())).zip(cached.par_iter());
-    rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (geometry, recycled)), &entry)| {
+    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter_mut())).zip(cached.par_iter());
+    rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (anchors, recycled)), &entry)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
         let reach = margin * thin + speculative[ia] + speculative[ib];
         let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
-        let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.geometry);
+        let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.anchors);
         *recycled = false;
         if let Some(old) = old.filter(|g| still(g, b, ia, ib, RECYCLE_DISTANCE * thin)) {
             *recycled = true;
-            *geometry = *old;
+            *anchors = *old;
             *m = placed(old, b, ia, ib);
             let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y])).unwrap_or(0);
             if m.len == 0 || m.gaps[deepest] > reach {
@@ -129,13 +131,13 @@ fn find_manifolds(ctx: &mut StepContext) {
             // Edge across edge, or nothing left by the clipping: one point where they meet.
             (m.points[0], m.gaps[0], m.len) = (point, axis.separation, 1);
         }
-        *geometry = fixed_to_bodies(m, axis.normal, b, ia, ib);
+        *anchors = fixed_to_bodies(m, axis.normal, b, ia, ib);
     });
 }
 
 /// True when B has moved, relative to A, by less than `distance` [m] since `g` was found: the
 /// shift of its centre plus the arc its rotation sweeps at its bounding radius.
-fn still(g: &Geometry, b: &Bodies, ia: usize, ib: usize, distance: Scalar) -> bool {
+fn still(g: &ContactAnchors, b: &Bodies, ia: usize, ib: usize, distance: Scalar) -> bool {
     let (offset, turn) = relative(b, ia, ib);
     let shift = (offset - g.offset).length();
     // The arc is 2 acos(c) r, c = |cos| of half the turn. A resting pair turns little: when an
@@ -161,10 +163,10 @@ fn relative(b: &Bodies, ia: usize, ib: usize) -> (Vector, Quat) {
 
 /// The manifold's points fixed to the bodies: each point's ends on A and on B (half its gap
 /// either side along the normal) in their body frames.
-fn fixed_to_bodies(m: &Manifold, normal: Vector, b: &Bodies, ia: usize, ib: usize) -> Geometry {
+fn fixed_to_bodies(m: &Manifold, normal: Vector, b: &Bodies, ia: usize, ib: usize) -> ContactAnchors {
     let (offset, turn) = relative(b, ia, ib);
     let (ra, rb) = (b.rotation[ia].transpose(), b.rotation[ib].transpose());
-    let mut g = Geometry { offset, turn, normal: ra * normal, len: m.len, ..Geometry::default() };
+    let mut g = ContactAnchors { offset, turn, normal: ra * normal, len: m.len, ..ContactAnchors::default() };
     for k in 0..m.len {
         let half = normal * (0.5 * m.gaps[k]);
         g.on_a[k] = ra * (m.points[k] + half - b.position[ia]);
@@ -175,7 +177,7 @@ fn fixed_to_bodies(m: &Manifold, normal: Vector, b: &Bodies, ia: usize, ib: usiz
 
 /// The manifold of the fixed points `g` at the bodies' current poses: each point halfway
 /// between its two ends, its gap their separation along the normal (turned with A).
-fn placed(g: &Geometry, b: &Bodies, ia: usize, ib: usize) -> Manifold {
+fn placed(g: &ContactAnchors, b: &Bodies, ia: usize, ib: usize) -> Manifold {
     let normal = b.rotation[ia] * g.normal;
     let mut m = Manifold { len: g.len, ..Manifold::default() };
     for k in 0..g.len {
@@ -199,7 +201,7 @@ fn substeps(ctx: &mut StepContext) {
     let (params, dt) = (&ctx.params, ctx.dt);
     let (count, h) = (params.substeps.max(1), params.substep(dt));
     let soft = Softness::new(h);
-    let s = &mut ctx.scratch.solve;
+    let s = ctx.scratch.get_mut::<SolveScratch>();
     let mut plan = vec![Step::Push(-params.gravity * dt)];
     for k in 0..count {
         plan.extend([Step::Push(params.gravity * h), Step::Pass(Pass::Warm)]);
@@ -223,15 +225,15 @@ fn substeps(ctx: &mut StepContext) {
         let i = i as usize;
         (b.velocity[i], b.angular_velocity[i], b.position[i], b.orientation[i]) = (v, w, x, q);
     }
-    for k in 0..ctx.scratch.solve.moving.len() {
-        ctx.mark_moved(ctx.scratch.solve.moving[k] as usize);
+    for &i in &s.moving {
+        ctx.posed.mark_moved(i as usize);
     }
 }
 
-/// Keeps this step's geometry and impulses for the next step, and counts one impulse per pair
+/// Keeps this step's anchors and impulses for the next step, and counts one impulse per pair
 /// held (by the feature that found its contact; near pairs no test found are not counted).
 fn remember(ctx: &mut StepContext) {
-    let s = &mut ctx.scratch.solve;
+    let s = ctx.scratch.get_mut::<SolveScratch>();
     // In pair order, which is the cache's: each pair's held entry by its index (sorting the
     // entries themselves, 300 bytes each, cost a third of a millisecond on a 40-row pyramid).
     s.by_pair.clear();
@@ -241,7 +243,7 @@ fn remember(ctx: &mut StepContext) {
     }
     s.by_pair.retain(|&h| h != u32::MAX);
     // Written in parallel: a serial part of the step waits for both threads.
-    let (held, pairs, groups, geometry) = (&s.held, &s.pairs, &s.groups, &s.geometry);
+    let (held, pairs, groups, anchors) = (&s.held, &s.pairs, &s.groups, &s.anchors);
     let entry = |&h: &u32| {
         let held = &held[h as usize];
         let group = &groups[usize::from(held.group)];
@@ -249,7 +251,7 @@ fn remember(ctx: &mut StepContext) {
         let [n, t1, t2] = batch.axes(lane);
         let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
         let mut entry = CachedManifold {
-            geometry: geometry[held.pair as usize],
+            anchors: anchors[held.pair as usize],
             tangent: t1 * j1 + t2 * j2,
             twist: n * jw,
             ..CachedManifold::default()

@@ -1,10 +1,10 @@
 //! `vertex`: the paper's vertex test. Vertices of one body inside the other
 //! (PHYSICS.md §1.4, erratum E5).
 
-use crate::contact::{Contact, Feature};
-use crate::geometry::{Posed, depth_along};
+use crate::collision::contact::{Contact, Feature};
+use crate::collision::posed::{Posed, depth_along};
 use crate::math::{Scalar, Vector};
-use crate::step::StepContext;
+use crate::sim::context::StepContext;
 use hecs::World;
 
 /// Gives each remaining candidate pair a vertex contact, testing both directions.
@@ -51,9 +51,9 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::components::Pose;
-    use crate::mesh::ConvexMesh;
-    use crate::shapes::octahedron_raw;
+    use crate::model::components::Pose;
+    use crate::model::mesh::ConvexMesh;
+    use crate::model::shapes::octahedron_raw;
     use std::sync::Arc;
 
     #[test]

@@ -158,7 +158,7 @@ fn check(sim: &Sim, case: &Case, tol: f64, form: &str) {
     }
     let mut want = [0; 3];
     want[case.feature as usize] = 1;
-    assert_eq!(sim.contacts, want, "{} ({form}): one impulse, from the {:?} test", case.scene, case.feature);
+    assert_eq!(sim.impulses, want, "{} ({form}): one impulse, from the {:?} test", case.scene, case.feature);
 }
 
 /// The scene-form file edited into the unit form: the mover advanced 0.1075 m along its
@@ -277,7 +277,7 @@ fn inelastic_cubes_stay_together_without_further_impulses() {
     // (a) with e = 0: after the impulse u_n = 0, so later steps apply nothing (E13).
     let mut sim = sim_of("face-collision.ron", |d| set_restitution(d, 0.0));
     sim.run(40).expect("finite");
-    assert_eq!(sim.contacts, [1, 0, 0]);
+    assert_eq!(sim.impulses, [1, 0, 0]);
     assert_close(actor(&sim, "a").velocity.linear.x, 0.5, 1e-12, "common velocity");
     assert_close(actor(&sim, "b").velocity.linear.x, 0.5, 1e-12, "common velocity");
 }
@@ -300,7 +300,7 @@ fn newtons_cradle_passes_the_velocity_to_the_last_cube_in_one_step() {
     sim.step().expect("finite");
     let v: Vec<f64> = sim.actors().iter().map(|a| a.velocity.linear.x).collect();
     assert_eq!(v, [0.0, 0.0, 0.0, 0.0, 1.0]);
-    assert_eq!(sim.contacts, [4, 0, 0]);
+    assert_eq!(sim.impulses, [4, 0, 0]);
     let t = sim.totals();
     assert_close(t.linear_momentum.x, 1.0, 1e-15, "momentum");
     assert_close(t.kinetic_energy, 0.5, 1e-15, "energy");

@@ -1,8 +1,8 @@
 //! Many bodies, all colliding, e = 1, in a closed box: the kinetic energy is kept, no cube
 //! escapes, and nothing goes non-finite (issue #4; BENCHMARKS.md's box-gas at small N).
 
-use rigid_sandbox::bench::box_gas_sim;
-use rigid_sandbox::spawners::box_gas_half_extent;
+use rigid_sandbox::scene::benchmarks::box_gas_sim;
+use rigid_sandbox::scene::spawners::box_gas_half_extent;
 
 #[test]
 fn box_gas_keeps_energy_and_its_cubes_for_600_steps() {
@@ -12,7 +12,7 @@ fn box_gas_keeps_energy_and_its_cubes_for_600_steps() {
     let mut impulses = 0;
     for _ in 0..600 {
         sim.step().expect("finite state every step");
-        impulses = sim.contacts.iter().sum::<u64>();
+        impulses = sim.impulses.iter().sum::<u64>();
     }
     let e1 = sim.totals().kinetic_energy;
     assert!(((e1 - e0) / e0).abs() <= 1e-3, "kinetic energy {e0} -> {e1}");

@@ -41,7 +41,7 @@ proptest! {
 
 #[test]
 fn grid_equals_all_pairs_on_box_gas_after_100_steps() {
-    let mut sim = rigid_sandbox::bench::box_gas_sim(1000, 1);
+    let mut sim = rigid_sandbox::scene::benchmarks::box_gas_sim(1000, 1);
     sim.run(100).expect("finite");
     assert!(assert_same(&mut sim) > 100, "a real workload");
 }

@@ -3,12 +3,12 @@
 
 mod common;
 use common::*;
-use rigid_sandbox::output::state_hash;
+use rigid_sandbox::io::output::state_hash;
 
 fn hash_with_threads(threads: usize, steps: u64) -> u64 {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
     pool.install(|| {
-        let mut sim = rigid_sandbox::bench::box_gas_sim(512, 1);
+        let mut sim = rigid_sandbox::scene::benchmarks::box_gas_sim(512, 1);
         sim.run(steps).expect("finite");
         state_hash(&sim.actors())
     })
@@ -52,9 +52,13 @@ fn a_pyramid_solved_in_two_sides_is_bit_identical_on_one_thread_or_two() {
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
         pool.install(|| {
-            let mut sim = rigid_sandbox::bench::scene_sim(rigid_sandbox::bench::BenchScene::Pyramid, 20, 1);
+            let mut sim = rigid_sandbox::scene::benchmarks::scene_sim(
+                rigid_sandbox::scene::benchmarks::BenchScene::Pyramid,
+                20,
+                1,
+            );
             sim.run(40).expect("finite");
-            assert!(!sim.ctx.scratch.solve.groups[1].batches.is_empty(), "split in two sides");
+            assert!(sim.ctx.stats.split, "split in two sides");
             state_hash(&sim.actors())
         })
     };
@@ -65,7 +69,8 @@ fn a_pyramid_solved_in_two_sides_is_bit_identical_on_one_thread_or_two() {
 fn pyramids_stepped_side_by_side_in_one_pool_match_each_alone() {
     // A user may step several sims at once in one pool's parallel loop: each still gives its
     // own bits, and none waits for ever on the threads another step keeps awake.
-    let pyramid = || rigid_sandbox::bench::scene_sim(rigid_sandbox::bench::BenchScene::Pyramid, 20, 1);
+    let pyramid =
+        || rigid_sandbox::scene::benchmarks::scene_sim(rigid_sandbox::scene::benchmarks::BenchScene::Pyramid, 20, 1);
     let alone = {
         let mut sim = pyramid();
         sim.run(15).expect("finite");

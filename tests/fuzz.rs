@@ -2,15 +2,15 @@
 //! never panic the loader; random valid scenes step 100 times without NaN.
 
 use proptest::prelude::*;
-use rigid_sandbox::{build, scene};
+use rigid_sandbox::scene;
 use std::path::Path;
 
 fn load(text: &str) {
     let path = Path::new("fuzz.ron");
     if let Ok(def) = scene::parse(text, path) {
         // Building may fail (bad mesh, limits) but must not panic; keep spawners small.
-        if def.spawners.iter().map(rigid_sandbox::spawners::SpawnerDef::count).sum::<u64>() < 5000 {
-            let _ = build::build(&def, path);
+        if def.spawners.iter().map(rigid_sandbox::scene::spawners::SpawnerDef::count).sum::<u64>() < 5000 {
+            let _ = scene::build(&def, path);
         }
     }
 }
@@ -50,7 +50,7 @@ proptest! {
             shapes[*s as usize], p.0, p.1, p.2, v.0, v.1, v.2, r.0, r.1, r.2)).collect();
         let text = format!("Scene(dt: 0.01, actors: [Actor(name: \"floor\", shape: Box(size: (20.0, 1.0, 20.0)), position: (0.0, -6.0, 0.0), fixed: true), {}])", list.join(", "));
         let path = Path::new("random.ron");
-        let mut sim = build::build(&scene::parse(&text, path).expect("valid"), path).expect("builds");
+        let mut sim = scene::build(&scene::parse(&text, path).expect("valid"), path).expect("builds");
         prop_assert!(sim.run(100).is_ok(), "NaN guard tripped");
     }
 }

@@ -4,8 +4,8 @@
 
 mod common;
 use common::*;
+use rigid_sandbox::io::render::{Camera, Overlay, actor_colour, render};
 use rigid_sandbox::math::Vector;
-use rigid_sandbox::render::{Camera, Overlay, actor_colour, render};
 use std::process::Command;
 
 #[test]

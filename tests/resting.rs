@@ -128,7 +128,9 @@ fn a_tower_of_twenty_boxes_does_not_buckle() {
     // stiffness than its weight's toppling moment and falls; at a quarter of the substep rate
     // it stands, sinking by its contacts' compliance only, and comes to rest.
     let mut sim = sim_of("tower.ron", |d| {
-        let rigid_sandbox::spawners::SpawnerDef::Grid { counts, .. } = &mut d.spawners[0] else { panic!("a grid") };
+        let rigid_sandbox::scene::spawners::SpawnerDef::Grid { counts, .. } = &mut d.spawners[0] else {
+            panic!("a grid")
+        };
         counts.1 = 20;
     });
     let start = actor(&sim, "box-19").pose.position;
@@ -181,13 +183,14 @@ fn without_gravity_and_friction_the_contact_solver_is_idle() {
     // The paper's model is the e = 1 / no-friction special case: solve does nothing there.
     let mut sim = sim_of("face-collision.ron", |_| {});
     sim.run(20).expect("finite");
-    assert!(sim.ctx.scratch.solve.held.is_empty());
-    assert_eq!(sim.contacts, [1, 0, 0]);
+    assert_eq!(sim.ctx.stats.held, 0);
+    assert_eq!(sim.impulses, [1, 0, 0]);
 }
 
 /// The pyramid of BENCHMARKS.md with `base` rows, sleeping on.
 fn sleeping_pyramid(base: u32) -> rigid_sandbox::sim::Sim {
-    let mut sim = rigid_sandbox::bench::scene_sim(rigid_sandbox::bench::BenchScene::Pyramid, base, 1);
+    let mut sim =
+        rigid_sandbox::scene::benchmarks::scene_sim(rigid_sandbox::scene::benchmarks::BenchScene::Pyramid, base, 1);
     sim.ctx.params.sleep = true;
     sim
 }
@@ -203,7 +206,7 @@ fn with_sleeping_on_a_settled_pyramid_falls_asleep_and_stays_exactly_put() {
     let before = sim.actors();
     sim.run(60).expect("finite");
     assert_eq!(sim.actors(), before, "asleep, nothing moves, not even by round-off");
-    assert_eq!(sim.ctx.scratch.solve.held.len(), 0, "no pair of sleeping cubes is solved");
+    assert_eq!(sim.ctx.stats.held, 0, "no pair of sleeping cubes is solved");
 }
 
 #[test]

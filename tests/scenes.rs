@@ -17,7 +17,7 @@ fn every_shipped_scene_runs_with_finite_state() {
         let text = std::fs::read_to_string(&path).expect("readable");
         assert!(text.starts_with("//"), "{}: a scene opens with a comment saying what it shows", path.display());
         let def = scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-        let mut sim = rigid_sandbox::build::build(&def, &path).unwrap_or_else(|e| panic!("{e}"));
+        let mut sim = rigid_sandbox::scene::build(&def, &path).unwrap_or_else(|e| panic!("{e}"));
         sim.run(def.steps.min(60)).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         for a in sim.actors() {
             let finite = a.pose.position.is_finite() && a.velocity.linear.is_finite() && a.velocity.angular.is_finite();
@@ -42,7 +42,7 @@ fn defaults_are_the_documented_ones() {
     );
     assert_eq!((a.restitution, a.friction, a.fixed, a.name.clone()), (DEFAULT_RESTITUTION, 0.0, false, None));
     // Density 1 and a 1×2×3 box: mass 6; the default name is actor-<index>.
-    let sim = rigid_sandbox::build::build(&def, "t.ron".as_ref()).expect("builds");
+    let sim = rigid_sandbox::scene::build(&def, "t.ron".as_ref()).expect("builds");
     let s = &sim.actors()[0];
     assert_eq!((s.name.as_str(), s.mass.mass), ("actor-0", 6.0));
 }

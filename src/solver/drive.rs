@@ -2,7 +2,7 @@
 
 use super::{BodyStore, Sides, Softness, SolverBody};
 use crate::math::{Scalar, Vector};
-use crate::step::{ConstraintGroup, SolveScratch};
+use crate::solver::{ConstraintGroup, SolveScratch};
 
 /// A pass of the kernel over a constraint group.
 #[derive(Clone, Copy, Debug)]

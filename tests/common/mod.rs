@@ -1,7 +1,7 @@
 //! Helpers shared by the integration tests (public API only).
 #![allow(dead_code)]
 
-use rigid_sandbox::build::build;
+use rigid_sandbox::scene::instantiate::build;
 use rigid_sandbox::scene::{self, SceneDef};
 use rigid_sandbox::sim::{ActorState, Sim};
 use std::path::{Path, PathBuf};
@@ -29,7 +29,7 @@ pub fn sim_from_text(text: &str) -> Sim {
 pub fn run_until_impulse(sim: &mut Sim, max: u64) -> u64 {
     for _ in 0..max {
         sim.step().expect("finite");
-        if sim.contacts.iter().sum::<u64>() > 0 {
+        if sim.impulses.iter().sum::<u64>() > 0 {
             return sim.steps;
         }
     }

@@ -1,13 +1,13 @@
 //! `Sim`: the world, its step context, the schedule and the clock. Structural changes
 //! (spawning) happen here, between steps; systems never spawn or despawn.
 
-use crate::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Name, Pose, Velocity};
-use crate::contact::Feature;
+use crate::collision::contact::Feature;
 use crate::error::StepError;
 use crate::math::{Mat3, Scalar, Vector};
-use crate::mesh::ConvexMesh;
-use crate::schedule::{Schedule, StepProfile};
-use crate::step::{Params, StepContext};
+use crate::model::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Name, Pose, Velocity};
+use crate::model::mesh::ConvexMesh;
+use crate::sim::context::{Params, StepContext};
+use crate::sim::schedule::{Schedule, StepProfile};
 use hecs::{Entity, World};
 
 /// A body to add: a validated mesh (about its centre of mass) and its initial state.
@@ -16,7 +16,7 @@ pub struct BodyDef {
     /// Unique name.
     pub name: String,
     /// Index of the mesh in the sim's `MeshTable` (from `Sim::add_mesh`).
-    pub mesh: crate::mesh::MeshId,
+    pub mesh: crate::model::mesh::MeshId,
     /// Mass [kg] (nominal for fixed bodies).
     pub mass: Scalar,
     /// Pose of the centre of mass.
@@ -53,7 +53,7 @@ pub struct Sim {
     /// Steps taken.
     pub steps: u64,
     /// Impulses applied over the run, by feature (face, vertex, edge).
-    pub contacts: [u64; 3],
+    pub impulses: [u64; 3],
     /// Timing of the last step.
     pub profile: StepProfile,
     pub(crate) names: Vec<String>,
@@ -70,14 +70,14 @@ impl Sim {
             schedule,
             time: 0.0,
             steps: 0,
-            contacts: [0; 3],
+            impulses: [0; 3],
             profile: StepProfile::default(),
             names: Vec::new(),
         }
     }
 
     /// Adds a mesh to the table (an identical one is shared) and returns its id.
-    pub fn add_mesh(&mut self, mesh: ConvexMesh) -> crate::mesh::MeshId {
+    pub fn add_mesh(&mut self, mesh: ConvexMesh) -> crate::model::mesh::MeshId {
         self.ctx.meshes.insert(mesh)
     }
 
@@ -119,13 +119,13 @@ impl Sim {
         &self.names
     }
 
-    /// Advances one step through the schedule; counts impulses into `contacts`.
+    /// Advances one step through the schedule; counts impulses into `impulses`.
     pub fn step(&mut self) -> Result<(), StepError> {
         self.schedule.run(&mut self.world, &mut self.ctx, &mut self.profile)?;
         self.steps += 1;
         self.time = self.steps as Scalar * self.ctx.dt;
         for f in Feature::ALL {
-            self.contacts[f as usize] += self.ctx.stats.impulses[f as usize];
+            self.impulses[f as usize] += self.ctx.stats.impulses[f as usize];
         }
         Ok(())
     }
@@ -177,7 +177,7 @@ impl ActorState {
     /// Inertia in world axes, R I Rᵀ [kg·m²].
     #[must_use]
     pub fn world_inertia(&self) -> Mat3 {
-        crate::bodies::rotate_tensor(self.pose.orientation, self.mass.inertia)
+        crate::sim::bodies::rotate_tensor(self.pose.orientation, self.mass.inertia)
     }
 }
 
@@ -191,7 +191,7 @@ fn accumulate<'a>(actors: impl Iterator<Item = (&'a Pose, &'a Velocity, &'a Mass
     let mut t = Totals { linear_momentum: Vector::ZERO, angular_momentum: Vector::ZERO, kinetic_energy: 0.0 };
     for (pose, vel, mass) in actors.filter(|(_, _, m)| !m.is_fixed()) {
         let (m, v, w) = (mass.mass, vel.linear, vel.angular);
-        let iw = crate::bodies::rotate_tensor(pose.orientation, mass.inertia) * w;
+        let iw = crate::sim::bodies::rotate_tensor(pose.orientation, mass.inertia) * w;
         t.linear_momentum += m * v;
         t.angular_momentum += pose.position.cross(m * v) + iw;
         t.kinetic_energy += 0.5 * m * v.length_squared() + 0.5 * w.dot(iw);

@@ -1,7 +1,7 @@
 //! The `rigid bench --plot` chart: time per step against actor count, log–log, one line per
 //! system and one for the whole step, drawn with plotters' SVG backend.
 
-use crate::bench::BenchResult;
+use crate::cli::bench::BenchResult;
 use plotters::prelude::*;
 use std::path::Path;
 

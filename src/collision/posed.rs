@@ -1,9 +1,9 @@
 //! Kernels the detection tests share: posed meshes, point-in-mesh, closest face, segment
 //! clipping and penetration depth (PHYSICS.md §1.1, §1.5, §2.6).
 
-use crate::components::Pose;
 use crate::math::{Scalar, Vector};
-use crate::mesh::{ConvexMesh, Plane};
+use crate::model::components::Pose;
+use crate::model::mesh::{ConvexMesh, Plane};
 use std::sync::Arc;
 
 /// Inside tolerance relative to the body's radius: points this far outside a face still count
@@ -118,7 +118,7 @@ impl Posed {
 /// point inside a closed mesh.
 ///
 /// ```
-/// # use rigid_sandbox::{geometry::{is_inside, Posed}, ConvexMesh, Pose, math::Vector};
+/// # use rigid_sandbox::{collision::posed::{is_inside, Posed}, ConvexMesh, Pose, math::Vector};
 /// # use std::sync::Arc;
 /// let cube = Posed::new(Arc::new(ConvexMesh::cuboid(Vector::ONE)), &Pose::IDENTITY);
 /// assert!(is_inside(&cube, Vector::new(0.5, 0.0, 0.0)));   // on a face: touching counts

@@ -3,7 +3,7 @@
 
 use crate::error::SceneError;
 use crate::math::{Scalar, Vector};
-use crate::spawners::SpawnerDef;
+use crate::scene::spawners::SpawnerDef;
 use miette::NamedSource;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -67,7 +67,7 @@ pub struct CameraDef {
 }
 
 fn default_fov() -> Scalar {
-    crate::render::DEFAULT_FOV_DEGREES
+    crate::io::render::DEFAULT_FOV_DEGREES
 }
 
 fn default_dt() -> Scalar {
@@ -104,7 +104,7 @@ pub struct SolverDef {
 
 impl Default for SolverDef {
     fn default() -> Self {
-        let p = crate::step::Params::default();
+        let p = crate::sim::context::Params::default();
         Self {
             max_sweeps: p.max_sweeps,
             correction: p.correction,
@@ -184,10 +184,10 @@ impl ShapeDef {
             Self::Octahedron { radius } => positive("radius", *radius),
             Self::Icosphere { radius, subdivisions } => {
                 positive("radius", *radius)?;
-                if *subdivisions > crate::shapes::MAX_SUBDIVISIONS {
+                if *subdivisions > crate::model::shapes::MAX_SUBDIVISIONS {
                     return Err((
                         "shape.subdivisions".into(),
-                        format!("must be 0..={}, got {subdivisions}", crate::shapes::MAX_SUBDIVISIONS),
+                        format!("must be 0..={}, got {subdivisions}", crate::model::shapes::MAX_SUBDIVISIONS),
                     ));
                 }
                 Ok(())
@@ -195,8 +195,8 @@ impl ShapeDef {
             Self::Cylinder { radius, height, segments } => {
                 positive("radius", *radius)?;
                 positive("height", *height)?;
-                if !crate::shapes::SEGMENTS_RANGE.contains(segments) {
-                    let r = crate::shapes::SEGMENTS_RANGE;
+                if !crate::model::shapes::SEGMENTS_RANGE.contains(segments) {
+                    let r = crate::model::shapes::SEGMENTS_RANGE;
                     return Err((
                         "shape.segments".into(),
                         format!("must be {}..={}, got {segments}", r.start(), r.end()),

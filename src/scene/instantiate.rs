@@ -2,18 +2,19 @@
 //! mesh built, validated and shared; masses from `mass` or `density` (PHYSICS.md §3).
 
 use crate::error::SceneError;
-use crate::mesh::{ConvexMesh, MeshId};
+use crate::model::mesh::{ConvexMesh, MeshId};
+use crate::model::shapes;
+use crate::scene::spawners::{Instance, MAX_ACTORS};
 use crate::scene::{MassSpec, SceneDef, ShapeDef, invalid, vector};
-use crate::shapes;
+use crate::sim::context::Params;
 use crate::sim::{BodyDef, Sim};
-use crate::spawners::{Instance, MAX_ACTORS};
-use crate::step::Params;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 /// Every actor of the scene in spawn order: listed actors, then each spawner's.
 pub fn instances(scene: &SceneDef, path: &Path) -> Result<Vec<Instance>, SceneError> {
-    let total = scene.actors.len() as u64 + scene.spawners.iter().map(crate::spawners::SpawnerDef::count).sum::<u64>();
+    let total =
+        scene.actors.len() as u64 + scene.spawners.iter().map(crate::scene::spawners::SpawnerDef::count).sum::<u64>();
     if total > MAX_ACTORS {
         return Err(invalid(
             path,
@@ -120,7 +121,7 @@ fn mesh_of(shape: &ShapeDef, path: &Path) -> Result<ConvexMesh, (String, crate::
         ShapeDef::Cylinder { radius, height, segments } => shapes::cylinder_raw(*radius, *height, *segments),
         ShapeDef::Obj { path: obj, scale } => {
             let file = crate::scene::base_dir(path).join(obj);
-            let raw = crate::obj::load_obj(&file, *scale)
+            let raw = crate::scene::obj::load_obj(&file, *scale)
                 .map_err(|reason| (file.display().to_string(), crate::error::MeshError::Unreadable { reason }))?;
             return ConvexMesh::new(raw.0, raw.1).map(|(m, _)| m).map_err(|e| (file.display().to_string(), e));
         }

@@ -2,7 +2,7 @@
 //! press on each other, so a box lying on a face is held at its corners and does not rock
 //! about the single point the detection tests report.
 
-use crate::geometry::Posed;
+use crate::collision::posed::Posed;
 use crate::math::{Scalar, Vector};
 
 /// Most points per pair: four span any flat contact patch of a convex pair.
@@ -285,8 +285,8 @@ fn closest_points(p0: Vector, p1: Vector, q0: Vector, q1: Vector) -> (Vector, Ve
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::components::Pose;
-    use crate::mesh::ConvexMesh;
+    use crate::model::components::Pose;
+    use crate::model::mesh::ConvexMesh;
     use std::sync::Arc;
 
     #[test]

@@ -2,9 +2,9 @@
 //! runner (DESIGN.md §5). Systems are plain functions, so a user's own system from outside the
 //! crate has the same powers as the shipped ones.
 
-use crate::components::Name;
 use crate::error::{ScheduleError, StepError};
-use crate::step::StepContext;
+use crate::model::components::Name;
+use crate::sim::context::StepContext;
 use hecs::World;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -24,8 +24,10 @@ pub struct System {
 /// Time spent in each part of one step; `rigid bench` averages these into `systems_ms`.
 #[derive(Clone, Debug, Default)]
 pub struct StepProfile {
-    /// `begin_step`: clearing buffers and taking the snapshot.
+    /// `begin_step`: clearing buffers and loading the bodies from the world.
     pub snapshot: Duration,
+    /// `end_step`: storing the bodies back into the world.
+    pub store: Duration,
     /// Each system, in run order.
     pub systems: Vec<(&'static str, Duration)>,
 }
@@ -91,9 +93,10 @@ impl Schedule {
         self.systems.iter().map(|s| s.name).collect()
     }
 
-    /// Runs one step: snapshot, then every system in order, each timed into `profile`. After
-    /// each system the NaN guard checks the bodies, so a bad state is stopped where it starts
-    /// and named (system, actor, field) instead of spreading.
+    /// Runs one step: load the bodies from the world, every system in order, each timed into
+    /// `profile`, then store the bodies back. After each system the NaN guard checks the
+    /// bodies, so a bad state is stopped where it starts and named (system, actor, field)
+    /// instead of spreading; the world then keeps the last good step.
     pub fn run(&self, world: &mut World, ctx: &mut StepContext, profile: &mut StepProfile) -> Result<(), StepError> {
         // A small scene's parallel parts are too short to wait for: keeping the other threads
         // awake would cost more than it saves (a 3-cube pyramid's step 22 -> 33 us).
@@ -123,6 +126,9 @@ impl Schedule {
                 return Err(StepError { step: ctx.step, system: system.name.to_string(), actor, field });
             }
         }
+        let start = Instant::now();
+        ctx.end_step(world);
+        profile.store = start.elapsed();
         Ok(())
     }
 

@@ -1,7 +1,7 @@
 //! Wavefront OBJ reader: `tobj` parses the file, this module turns it into a validated mesh.
 
 use crate::math::{Scalar, Vector};
-use crate::shapes::RawMesh;
+use crate::model::shapes::RawMesh;
 use std::path::Path;
 
 /// Most vertices accepted from one OBJ: the narrow phase is O(F_A·F_B) per pair (PHYSICS.md

@@ -2,11 +2,15 @@
 //! builds them so both engines start from the same state: the `pyramid` of unit cubes on a
 //! ground slab, and the `rain` of cubes dropped into an open box.
 
-use crate::components::{Material, Pose, Velocity};
 use crate::math::{Scalar, Vector};
+use crate::model::components::{Material, Pose, Velocity};
 use crate::rng::SplitMix64;
+use crate::scene::instantiate::spawn_all;
+use crate::scene::spawners::{Instance, box_gas, uniform_rotation};
 use crate::scene::{MassSpec, ShapeDef};
-use crate::spawners::{Instance, uniform_rotation};
+use crate::sim::Sim;
+use crate::sim::context::Params;
+use std::path::Path;
 
 /// A fixed box of the given full size at `position`.
 fn slab(name: String, size: Vector, position: Vector, material: Material) -> Instance {
@@ -114,6 +118,64 @@ pub fn rain(n: u32, seed: u64) -> Vec<Instance> {
         out.push(cube(format!("cube-{i}"), Pose { position, orientation: uniform_rotation(u) }, material));
     }
     out
+}
+
+/// The benchmark scenes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchScene {
+    /// Unit cubes in a closed box, no gravity, e = 1 (size = cubes).
+    BoxGas,
+    /// A pyramid of cubes on the ground (size = cubes in the base row).
+    Pyramid,
+    /// Cubes dropped into an open box (size = cubes).
+    Rain,
+}
+
+impl BenchScene {
+    /// The scene's name in output.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::BoxGas => "box-gas",
+            Self::Pyramid => "pyramid",
+            Self::Rain => "rain",
+        }
+    }
+
+    /// The actors of the scene of this size.
+    pub fn instances(self, size: u32, seed: u64) -> Vec<Instance> {
+        match self {
+            Self::BoxGas => box_gas(size, seed),
+            Self::Pyramid => pyramid(size),
+            Self::Rain => rain(size, seed),
+        }
+    }
+
+    /// Which actor indices are the cubes: box-gas puts its 6 walls after them, the others
+    /// their ground (1) or floor and walls (5) before, as the peer harness does.
+    pub fn cubes(self, actors: usize) -> std::ops::Range<usize> {
+        match self {
+            Self::BoxGas => 0..actors - 6,
+            Self::Pyramid => 1..actors,
+            Self::Rain => 5..actors,
+        }
+    }
+}
+
+/// The box-gas simulation of BENCHMARKS.md with `n` cubes (walls after the cubes), no gravity,
+/// dt = 1/60, the default schedule.
+#[must_use]
+pub fn box_gas_sim(n: u32, seed: u64) -> Sim {
+    scene_sim(BenchScene::BoxGas, n, seed)
+}
+
+/// A benchmark scene as a simulation: dt = 1/60, gravity −9.81 but none for box-gas.
+#[must_use]
+pub fn scene_sim(scene: BenchScene, size: u32, seed: u64) -> Sim {
+    let gravity = if scene == BenchScene::BoxGas { Vector::ZERO } else { Vector::new(0.0, -9.81, 0.0) };
+    let mut sim = Sim::new(1.0 / 60.0, Params { gravity, ..Params::default() }, crate::systems::default_schedule());
+    spawn_all(&mut sim, &scene.instances(size, seed), Path::new(scene.name())).expect("benchmark scenes are valid");
+    sim
 }
 
 #[cfg(test)]

@@ -25,15 +25,17 @@
 
 use crate::math::{Scalar, Vector};
 
-mod build;
+mod constraints;
 mod drive;
 mod kernel;
 mod lanes;
+mod scratch;
 
-pub(crate) use build::build_constraints;
+pub(crate) use constraints::build_constraints;
 pub(crate) use drive::{Pass, Step, drive};
 pub use kernel::{restitution, sweep, warm_start};
 pub use lanes::{Batch, FrictionRows, Lanes, PointRows, Wide};
+pub use scratch::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, SolveScratch};
 
 /// A body as the substeps see it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

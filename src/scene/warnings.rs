@@ -39,7 +39,7 @@ fn overlaps(sim: &mut Sim) -> Vec<String> {
         }
     }
     ctx.pairs.clear();
-    ctx.stats = crate::step::StepStats::default();
+    ctx.stats = crate::sim::context::StepStats::default();
     ctx.step -= 1; // the detection pass above is not a step
     out
 }

@@ -1,7 +1,7 @@
 //! The components of an actor. Plain data: behaviour lives in systems and kernels.
 
 use crate::math::{Mat3, Quat, Scalar, Vector};
-use crate::mesh::MeshId;
+use crate::model::mesh::MeshId;
 
 /// Row of the actor in every per-step array, and its place in output files (scene order).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -74,7 +74,7 @@ impl MassProps {
     /// A fixed body: infinite effective mass, but the nominal values are kept for output.
     #[must_use]
     pub fn fixed(mass: Scalar, inertia: Mat3) -> Self {
-        let (principal_moments, axes) = crate::mass::principal_axes(inertia);
+        let (principal_moments, axes) = crate::model::mass::principal_axes(inertia);
         let principal_axes = Quat::from_mat3(&axes).normalize();
         Self { mass, inv_mass: 0.0, inertia, inv_inertia: Mat3::ZERO, principal_moments, principal_axes }
     }

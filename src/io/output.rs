@@ -2,7 +2,7 @@
 //! printed so they round-trip an f64; files are written atomically (temp file + rename), so a
 //! failed run never leaves a half-written file.
 
-use crate::contact::Feature;
+use crate::collision::contact::Feature;
 use crate::sim::{ActorState, Sim, totals};
 use serde::Serialize;
 use std::io::Write;
@@ -40,7 +40,7 @@ struct StateJson<'a> {
 #[must_use]
 pub fn state_json(sim: &Sim, actors: &[ActorState]) -> String {
     let t = totals(actors);
-    let contacts = Feature::ALL.iter().map(|f| (f.name().to_string(), sim.contacts[*f as usize].into())).collect();
+    let contacts = Feature::ALL.iter().map(|f| (f.name().to_string(), sim.impulses[*f as usize].into())).collect();
     let doc = StateJson {
         time: sim.time,
         steps: sim.steps,

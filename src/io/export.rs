@@ -22,7 +22,7 @@ pub struct ExportScene<'a> {
     /// (name, mesh index into `meshes`, fixed, colour).
     pub actors: Vec<(String, usize, bool, [u8; 3])>,
     /// Distinct meshes.
-    pub meshes: Vec<&'a crate::mesh::ConvexMesh>,
+    pub meshes: Vec<&'a crate::model::mesh::ConvexMesh>,
 }
 
 /// Appends little-endian f32s to the blob and returns a view + accessor for them.

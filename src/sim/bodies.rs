@@ -2,9 +2,9 @@
 //! actor's `ActorIndex`). Pair loops read these, never the world, so they hold no hecs borrows
 //! and are plain data that threads can share (DESIGN.md §3).
 
-use crate::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
 use crate::math::{Mat3, Quat, Scalar, Vector, world_inverse_inertia};
-use crate::mesh::{MeshId, MeshTable};
+use crate::model::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
+use crate::model::mesh::{MeshId, MeshTable};
 use hecs::{Entity, World};
 
 /// Structure of arrays, one row per actor.

@@ -164,7 +164,7 @@ pub fn cylinder_raw(radius: Scalar, height: Scalar, segments: u32) -> RawMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::ConvexMesh;
+    use crate::model::mesh::ConvexMesh;
 
     fn build((v, t): RawMesh) -> ConvexMesh {
         ConvexMesh::new(v, t).expect("built-in shapes are valid").0

@@ -6,8 +6,8 @@
 //! such as a box face's two halves, share one plane: same answers, half the work).
 
 use crate::error::MeshError;
-use crate::mass::{VolumeProps, volume_props};
 use crate::math::{Mat3, Scalar, Vector};
+use crate::model::mass::{VolumeProps, volume_props};
 use std::collections::{HashMap, VecDeque};
 
 /// Slack for convexity [fraction of the mesh size]: a vertex may stand this far in front of a
@@ -125,7 +125,7 @@ impl ConvexMesh {
     /// If a size is not positive and finite: callers pass checked or literal sizes.
     #[must_use]
     pub fn cuboid(size: Vector) -> Self {
-        let (v, t) = crate::shapes::box_raw(size);
+        let (v, t) = crate::model::shapes::box_raw(size);
         Self::new(v, t).expect("a box with positive sizes is a valid convex mesh").0
     }
 }
@@ -366,7 +366,7 @@ fn unique_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shapes::box_raw;
+    use crate::model::shapes::box_raw;
 
     #[test]
     fn box_has_eight_vertices_eighteen_edges_six_planes() {

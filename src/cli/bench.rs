@@ -1,58 +1,14 @@
 //! The `rigid bench` driver (BENCHMARKS.md): builds a benchmark scene, warms up, times the
 //! schedule's steps, and reports per size as a table row or a JSON line.
 
-use crate::build::spawn_all;
+use super::{AppError, write_error, write_out};
+use crate::cli::args::BenchArgs;
 use crate::math::Vector;
-use crate::schedule::StepProfile;
-use crate::sim::Sim;
-use crate::spawners::{Instance, box_gas, box_gas_half_extent};
-use crate::stacks::{pyramid, rain, rain_half_width};
-use crate::step::Params;
+use crate::scene::benchmarks::{BenchScene, rain_half_width, scene_sim};
+use crate::scene::spawners::box_gas_half_extent;
+use crate::sim::schedule::StepProfile;
 use std::collections::BTreeMap;
-use std::path::Path;
 use std::time::Duration;
-
-/// The benchmark scenes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BenchScene {
-    /// Unit cubes in a closed box, no gravity, e = 1 (size = cubes).
-    BoxGas,
-    /// A pyramid of cubes on the ground (size = cubes in the base row).
-    Pyramid,
-    /// Cubes dropped into an open box (size = cubes).
-    Rain,
-}
-
-impl BenchScene {
-    /// The scene's name in output.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::BoxGas => "box-gas",
-            Self::Pyramid => "pyramid",
-            Self::Rain => "rain",
-        }
-    }
-
-    /// The actors of the scene of this size.
-    fn instances(self, size: u32, seed: u64) -> Vec<Instance> {
-        match self {
-            Self::BoxGas => box_gas(size, seed),
-            Self::Pyramid => pyramid(size),
-            Self::Rain => rain(size, seed),
-        }
-    }
-
-    /// Which actor indices are the cubes: box-gas puts its 6 walls after them, the others
-    /// their ground (1) or floor and walls (5) before, as the peer harness does.
-    fn cubes(self, actors: usize) -> std::ops::Range<usize> {
-        match self {
-            Self::BoxGas => 0..actors - 6,
-            Self::Pyramid => 1..actors,
-            Self::Rain => 5..actors,
-        }
-    }
-}
 
 /// What one benchmark run measured.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -102,22 +58,6 @@ pub struct BenchResult {
     pub systems_ms: BTreeMap<String, f64>,
 }
 
-/// The box-gas simulation of BENCHMARKS.md with `n` cubes (walls after the cubes), no gravity,
-/// dt = 1/60, the default schedule.
-#[must_use]
-pub fn box_gas_sim(n: u32, seed: u64) -> Sim {
-    scene_sim(BenchScene::BoxGas, n, seed)
-}
-
-/// A benchmark scene as a simulation: dt = 1/60, gravity −9.81 but none for box-gas.
-#[must_use]
-pub fn scene_sim(scene: BenchScene, size: u32, seed: u64) -> Sim {
-    let gravity = if scene == BenchScene::BoxGas { Vector::ZERO } else { Vector::new(0.0, -9.81, 0.0) };
-    let mut sim = Sim::new(1.0 / 60.0, Params { gravity, ..Params::default() }, crate::systems::default_schedule());
-    spawn_all(&mut sim, &scene.instances(size, seed), Path::new(scene.name())).expect("benchmark scenes are valid");
-    sim
-}
-
 /// Runs a benchmark scene: `warmup` untimed steps, then `steps` timed ones. Call it inside the
 /// rayon pool of the wanted thread count. `sleep` lets still bodies sleep (`Params::sleep`).
 pub fn run(
@@ -143,8 +83,9 @@ pub fn run(
         candidates += sim.ctx.stats.candidates;
         contacts += sim.ctx.stats.found.iter().sum::<u64>();
         let p: &StepProfile = &sim.profile;
-        per_step.push(p.snapshot + p.systems.iter().map(|s| s.1).sum::<Duration>());
+        per_step.push(p.snapshot + p.store + p.systems.iter().map(|s| s.1).sum::<Duration>());
         *parts.entry("snapshot".into()).or_default() += p.snapshot;
+        *parts.entry("store".into()).or_default() += p.store;
         for (name, d) in &p.systems {
             *parts.entry((*name).to_string()).or_default() += *d;
         }
@@ -202,4 +143,88 @@ pub fn peak_rss_mib() -> f64 {
             s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
         })
         .map_or(0.0, |kib| kib / 1024.0)
+}
+
+/// `rigid bench`: runs each size and prints a table or JSON lines, and the CSV and plot asked for.
+pub(super) fn bench(args: &BenchArgs) -> Result<(), AppError> {
+    use crate::scene::benchmarks::BenchScene;
+    let threads = rayon::current_num_threads();
+    let (scene, mut sizes) = match args.scene.as_str() {
+        "pyramid" => (BenchScene::Pyramid, args.base.clone()),
+        "rain" => (BenchScene::Rain, args.actors.clone()),
+        _ => (BenchScene::BoxGas, args.actors.clone()),
+    };
+    if sizes.is_empty() {
+        let flag = if scene == BenchScene::Pyramid { "--base" } else { "--actors" };
+        return Err(AppError::Usage(format!("bench {}: give {flag} N[,N...]", scene.name())));
+    }
+    sizes.sort_unstable();
+    let gas = scene == BenchScene::BoxGas;
+    let steps = args.steps.unwrap_or(if gas { 200 } else { 600 });
+    let warmup = args.warmup.unwrap_or(if gas { 20 } else { 0 });
+    let mut rows = Vec::new();
+    if !args.json {
+        println!(
+            "{:>8} {:>8} {:>12} {:>12} {:>14} {:>14} {:>12} {:>10}",
+            "actors", "threads", "mean ms", "median ms", "ke start", "ke end", "check", "rss MiB"
+        );
+    }
+    for size in sizes {
+        let r = crate::cli::bench::run(scene, size, steps, warmup, args.seed, threads, args.sleep)?;
+        if args.json {
+            println!("{}", serde_json::to_string(&r).expect("plain data serialises"));
+        } else {
+            let check = match (r.escaped, r.max_displacement_m, r.outside) {
+                (Some(e), _, _) => format!("{e} escaped"),
+                (_, Some(d), _) => format!("{d:.4} m moved"),
+                (_, _, Some(o)) => format!("{o} outside"),
+                _ => String::new(),
+            };
+            println!(
+                "{:>8} {:>8} {:>12.3} {:>12.3} {:>14.4} {:>14.4} {:>12} {:>10.1}",
+                r.actors,
+                r.threads,
+                r.mean_ms_per_step,
+                r.median_ms_per_step,
+                r.ke_start,
+                r.ke_end,
+                check,
+                r.peak_rss_mib
+            );
+            let parts: Vec<String> = r.systems_ms.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
+            println!("         ms/step by system: {}", parts.join(", "));
+        }
+        rows.push(r);
+    }
+    if let Some(path) = &args.csv {
+        let mut csv = String::from(
+            "scene,actors,threads,steps,mean_ms_per_step,median_ms_per_step,ke_start,ke_end,escaped,max_displacement_m,outside,peak_rss_mib\n",
+        );
+        let opt = |v: Option<String>| v.unwrap_or_default();
+        for r in &rows {
+            csv += &format!(
+                "{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                r.scene,
+                r.actors,
+                r.threads,
+                r.steps,
+                r.mean_ms_per_step,
+                r.median_ms_per_step,
+                r.ke_start,
+                r.ke_end,
+                opt(r.escaped.map(|v| v.to_string())),
+                opt(r.max_displacement_m.map(|v| v.to_string())),
+                opt(r.outside.map(|v| v.to_string())),
+                r.peak_rss_mib
+            );
+        }
+        write_out(path, csv)?;
+    }
+    if let Some(path) = &args.plot {
+        let tmp = crate::io::output::temp_path(path);
+        crate::cli::plot::plot_svg(&tmp, &rows)
+            .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()))
+            .map_err(|reason| write_error(path, std::io::Error::other(reason)))?;
+    }
+    Ok(())
 }

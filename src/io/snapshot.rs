@@ -4,11 +4,12 @@
 //! solver and sleeping carry from one step to the next (the warm-start cache, how long each
 //! body has been still); JSON floats are written shortest-round-trip and read back exactly.
 
-use crate::components::{Pose, Velocity};
-use crate::manifold::MAX_POINTS;
+use crate::collision::manifold::MAX_POINTS;
 use crate::math::{Quat, Vector};
+use crate::model::components::{Pose, Velocity};
 use crate::sim::Sim;
-use crate::step::{CachedManifold, Geometry, SleepState};
+use crate::sim::context::SleepState;
+use crate::solver::{CachedManifold, ContactAnchors, SolveScratch};
 use serde::{Deserialize, Serialize};
 
 /// Version of the snapshot format; a reader refuses other versions.
@@ -107,7 +108,7 @@ impl Snapshot {
             schedule: sim.schedule.names().iter().map(ToString::to_string).collect(),
             time: sim.time,
             steps: sim.steps,
-            contacts: sim.contacts,
+            contacts: sim.impulses,
             actors: sim
                 .actors()
                 .into_iter()
@@ -119,14 +120,9 @@ impl Snapshot {
                     angular_velocity: a.velocity.angular.to_array(),
                 })
                 .collect(),
-            warm_start: sim
-                .ctx
-                .scratch
-                .solve
-                .cache
-                .iter()
-                .map(|&((a, b), ref c)| ContactSnapshot::of([a, b], c))
-                .collect(),
+            warm_start: sim.ctx.scratch.get::<SolveScratch>().map_or_else(Vec::new, |s| {
+                s.cache.iter().map(|&((a, b), ref c)| ContactSnapshot::of([a, b], c)).collect()
+            }),
             sleep: (!sim.ctx.sleep.still.is_empty()).then(|| SleepSnapshot::of(&sim.ctx.sleep)),
         }
     }
@@ -165,7 +161,7 @@ impl Snapshot {
             Some(s) => s.state(n)?,
             None => SleepState::default(),
         };
-        let mut query = sim.world.query::<(&crate::components::ActorIndex, &mut Pose, &mut Velocity)>();
+        let mut query = sim.world.query::<(&crate::model::components::ActorIndex, &mut Pose, &mut Velocity)>();
         for (index, pose, vel) in query.iter() {
             let s = &self.actors[index.0 as usize];
             *pose = Pose { position: Vector::from_array(s.position), orientation: Quat::from_array(s.orientation) };
@@ -174,8 +170,8 @@ impl Snapshot {
         drop(query);
         sim.time = self.time;
         sim.steps = self.steps;
-        sim.contacts = self.contacts;
-        sim.ctx.scratch.solve.cache = cache;
+        sim.impulses = self.contacts;
+        sim.ctx.scratch.get_mut::<SolveScratch>().cache = cache;
         sim.ctx.sleep = sleep;
         Ok(())
     }
@@ -193,7 +189,7 @@ fn unit(q: [f64; 4]) -> bool {
 
 impl ContactSnapshot {
     fn of(pair: [u32; 2], c: &CachedManifold) -> Self {
-        let g = &c.geometry;
+        let g = &c.anchors;
         Self {
             pair,
             offset: g.offset.to_array(),
@@ -224,12 +220,12 @@ impl ContactSnapshot {
         if self.impulses.iter().any(|&j| j < 0.0) {
             return Err("a normal impulse is negative (they push, never pull)".to_string());
         }
-        let mut g = Geometry {
+        let mut g = ContactAnchors {
             offset: Vector::from_array(self.offset),
             turn: Quat::from_array(self.turn),
             normal: Vector::from_array(self.normal),
             len,
-            ..Geometry::default()
+            ..ContactAnchors::default()
         };
         let mut entry = CachedManifold {
             tangent: Vector::from_array(self.tangent),
@@ -240,7 +236,7 @@ impl ContactSnapshot {
             (g.on_a[k], g.on_b[k]) = (Vector::from_array(self.on_a[k]), Vector::from_array(self.on_b[k]));
         }
         entry.normal[..len].copy_from_slice(&self.impulses);
-        entry.geometry = g;
+        entry.anchors = g;
         Ok(entry)
     }
 }

@@ -3,11 +3,12 @@
 //! pair's rows with the impulses of last step's matching points.
 
 use super::{Batch, Constraint, ContactPoint, Friction, PointRows, SolverBody};
-use crate::bodies::Bodies;
-use crate::contact::Pair;
-use crate::manifold::Manifold;
+use crate::collision::contact::Pair;
+use crate::collision::manifold::Manifold;
 use crate::math::{Mat3, Scalar, Vector, total_order_key};
-use crate::step::{CachedManifold, ConstraintGroup, Geometry, HeldPair, SolveScratch, StepContext};
+use crate::sim::bodies::Bodies;
+use crate::sim::context::StepContext;
+use crate::solver::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, SolveScratch};
 
 /// Fastest push out of a penetration [m/s] (Box2D v3's and rapier's 3 m/s): faster, a cube
 /// squeezed into a pile is shot out of it.
@@ -23,7 +24,7 @@ const MATCH_DISTANCE: Scalar = 0.05;
 pub(crate) fn build_constraints(ctx: &mut StepContext) {
     let b = &ctx.bodies;
     let (params, dt) = (&ctx.params, ctx.dt);
-    let s = &mut ctx.scratch.solve;
+    let s = ctx.scratch.get_mut::<SolveScratch>();
     // Lowest contacts first: each forward sweep then carries the support up a stack in one
     // pass. The order matters: top-down sweeps let a tall pyramid wobble. Ties keep pair order.
     let up = -params.gravity.normalize_or_zero();
@@ -70,7 +71,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     }
     // The two sides' groups placed and filled at once (they write disjoint batches), the third
     // beside the first.
-    let SolveScratch { groups, held, pairs, manifolds, slot, scale, cache, cached, geometry, recycled, .. } = s;
+    let SolveScratch { groups, held, pairs, manifolds, slot, scale, cache, cached, anchors, recycled, .. } = s;
     let shared = Shared {
         b,
         params,
@@ -83,7 +84,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         scale,
         cache,
         cached,
-        geometry,
+        anchors,
         recycled,
     };
     let [first, second, across] = groups;
@@ -123,9 +124,9 @@ fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
 /// What `fill` reads.
 struct Shared<'a> {
     b: &'a Bodies,
-    params: &'a crate::step::Params,
+    params: &'a crate::sim::context::Params,
     dt: Scalar,
-    meshes: &'a crate::mesh::MeshTable,
+    meshes: &'a crate::model::mesh::MeshTable,
     held: &'a [HeldPair],
     pairs: &'a [Pair],
     manifolds: &'a [Manifold],
@@ -133,7 +134,7 @@ struct Shared<'a> {
     scale: &'a [Mat3],
     cache: &'a [((u32, u32), CachedManifold)],
     cached: &'a [u32],
-    geometry: &'a [Geometry],
+    anchors: &'a [ContactAnchors],
     recycled: &'a [bool],
 }
 
@@ -159,12 +160,12 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
         let inv_mass = [b.inv_mass[ia], b.inv_mass[ib]];
         let cached = (sh.cached[k as usize] != u32::MAX).then(|| &sh.cache[sh.cached[k as usize] as usize].1);
         let mu = b.pair_friction(ia, ib);
-        let (geometry, recycled) = (&sh.geometry[k as usize], sh.recycled[k as usize]);
+        let (anchors, recycled) = (&sh.anchors[k as usize], sh.recycled[k as usize]);
         let into = &mut batches[batch as usize];
         let first = into.first as usize;
         // The friction patch's centre: the mean of the points.
         let centre = m.points().iter().sum::<Vector>() / m.len as Scalar;
-        let mut rows = [ContactPoint::IDLE; crate::manifold::MAX_POINTS];
+        let mut rows = [ContactPoint::IDLE; crate::collision::manifold::MAX_POINTS];
         let (before_a, before_b) = (before(ia), before(ib));
         for (j, (&p, &gap)) in m.points().iter().zip(&m.gaps).enumerate() {
             let r = [p - b.position[ia], p - b.position[ib]];
@@ -174,8 +175,8 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
             // A recycled point is last step's own; a new one takes the impulse of the old
             // point at the same place on A, if any.
             let old = cached.and_then(|c| {
-                let near = |q: usize| (c.geometry.on_a[q] - geometry.on_a[j]).length() <= MATCH_DISTANCE * b.radius[ia];
-                if recycled { Some(j) } else { (0..c.geometry.len).find(|&q| near(q)) }.map(|q| c.normal[q])
+                let near = |q: usize| (c.anchors.on_a[q] - anchors.on_a[j]).length() <= MATCH_DISTANCE * b.radius[ia];
+                if recycled { Some(j) } else { (0..c.anchors.len).find(|&q| near(q)) }.map(|q| c.normal[q])
             });
             let k = inv_mass[0] + inv_mass[1] + g[0].length_squared() + g[1].length_squared();
             rows[j] = ContactPoint {

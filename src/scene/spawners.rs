@@ -2,8 +2,8 @@
 //! through `rng.rs`, never from system entropy. The box-gas scene of BENCHMARKS.md exists once,
 //! here, and serves the `BoxGas` spawner, `rigid bench`, the benches and the tests.
 
-use crate::components::{Material, Pose, Velocity};
 use crate::math::{Quat, Scalar, Vector, from_euler_degrees};
+use crate::model::components::{Material, Pose, Velocity};
 use crate::rng::SplitMix64;
 use crate::scene::{ActorDef, MassSpec, ShapeDef, V3, vector};
 use serde::Deserialize;
@@ -191,8 +191,8 @@ impl SpawnerDef {
                     .collect()
             }
             Self::BoxGas { actors, seed } => box_gas(*actors, *seed),
-            Self::Pyramid { base } => crate::stacks::pyramid(*base),
-            Self::Rain { actors, seed } => crate::stacks::rain(*actors, *seed),
+            Self::Pyramid { base } => crate::scene::benchmarks::pyramid(*base),
+            Self::Rain { actors, seed } => crate::scene::benchmarks::rain(*actors, *seed),
         }
     }
 }

@@ -1,0 +1,6 @@
+//! Collision geometry the detection systems share: meshes posed in the world, contacts and
+//! candidate pairs, and the clipped manifolds that resting contact holds.
+
+pub mod contact;
+pub mod manifold;
+pub mod posed;

@@ -1,0 +1,12 @@
+//! Scenes: the RON format and its checks, spawners that expand into many actors, the
+//! benchmark scenes, OBJ models, building a `Sim` from a scene, and start-of-run warnings.
+
+pub mod benchmarks;
+pub mod instantiate;
+pub mod obj;
+mod schema;
+pub mod spawners;
+pub mod warnings;
+
+pub use instantiate::build;
+pub use schema::*;

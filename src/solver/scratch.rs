@@ -1,0 +1,134 @@
+//! The contact solver's state: the constraints of a step in their groups and batches, and the
+//! warm-start cache (each pair's recycled points and impulses), the one part of it that lives
+//! from one step to the next (snapshots carry it).
+
+use crate::collision::contact::Pair;
+use crate::collision::manifold::{MAX_POINTS, Manifold};
+use crate::math::{Mat3, Quat, Scalar, Vector};
+use crate::solver::{Batch, PointRows, SolverBody};
+
+/// Constraints solved together (see `SolveScratch::groups`), with their own solver-body
+/// numbering: a group's slots count from `offset`, and its static slot is the last of its
+/// range.
+#[derive(Clone, Debug, Default)]
+pub struct ConstraintGroup {
+    /// First solver body of the group's range.
+    pub offset: u32,
+    /// The group's static slot, in its own numbering.
+    pub fixed: u32,
+    /// Solver-body slots of each constraint, in the group's numbering (for `solver::place`).
+    pub slots: Vec<[u32; 2]>,
+    /// (batch, lane) of each constraint.
+    pub placed: Vec<(u32, u8)>,
+    /// Constraints per batch.
+    pub fill: Vec<u8>,
+    /// Scratch of `solver::place`.
+    pub last: Vec<u32>,
+    /// The batches of independent constraints, in solving order.
+    pub batches: Vec<Batch>,
+    /// Their points, lane by lane.
+    pub points: Vec<PointRows>,
+}
+
+/// A pair `solve` holds this step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeldPair {
+    /// Index into `SolveScratch::pairs`.
+    pub pair: u32,
+    /// Its group (`SolveScratch::groups`).
+    pub group: u8,
+    /// Its batch in the group.
+    pub batch: u32,
+    /// Lane within the batch.
+    pub lane: u8,
+    /// Points (1 to 4).
+    pub len: u8,
+}
+
+/// A pair's contact points fixed to the two bodies, so a pair that has hardly moved relative to
+/// each other since they were found keeps them (rapier's contact recycling): the manifold,
+/// and so the warm start, stays the same from step to step instead of being rebuilt from
+/// round-off, and the separating-axis test and clipping are skipped.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactAnchors {
+    /// B's centre in A's body frame when the points were found [m].
+    pub offset: Vector,
+    /// B's orientation relative to A's then.
+    pub turn: Quat,
+    /// The normal (from B to A) in A's body frame.
+    pub normal: Vector,
+    /// Each point on A's surface, A's body frame [m].
+    pub on_a: [Vector; MAX_POINTS],
+    /// Each point on B's surface, B's body frame [m].
+    pub on_b: [Vector; MAX_POINTS],
+    /// How many points.
+    pub len: usize,
+}
+
+/// A pair's cached state: its contact anchors and its impulses (points' and friction
+/// patch's), without a heap allocation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CachedManifold {
+    /// Where the points are.
+    pub anchors: ContactAnchors,
+    /// Each point's normal impulse [N·s].
+    pub normal: [Scalar; MAX_POINTS],
+    /// Friction impulse at the patch's centre, world frame [N·s].
+    pub tangent: Vector,
+    /// Twist impulse about the normal, world frame [N·m·s].
+    pub twist: Vector,
+}
+
+/// Reused buffers of the contact solver (`solve`), and its warm-start cache, the one piece of
+/// its state that lives from one step to the next (recycled points and impulses; snapshots
+/// carry it, `snapshot::ContactSnapshot`).
+#[derive(Clone, Debug, Default)]
+pub struct SolveScratch {
+    /// The pairs solved this step, in pair order.
+    pub pairs: Vec<Pair>,
+    /// Their manifolds.
+    pub manifolds: Vec<Manifold>,
+    /// Whether each pair is near but untouched (no test found it).
+    pub near: Vec<bool>,
+    /// The order in which pairs are solved: (height of the contact against gravity as a
+    /// `math::total_order_key`, index).
+    pub order: Vec<(u64, u32)>,
+    /// One entry per held pair, in solving order.
+    pub held: Vec<HeldPair>,
+    /// The constraints in three groups: those among the bodies of one side of the scene, of
+    /// the other, and across (see `solver::build_constraints`). The first two are solved at
+    /// once on two threads, the third after them.
+    pub groups: [ConstraintGroup; 3],
+    /// Each pair's contact anchors (in `pairs` order), found or recycled this step.
+    pub anchors: Vec<ContactAnchors>,
+    /// Whether each pair's anchors was recycled from the previous step.
+    pub recycled: Vec<bool>,
+    /// Each pair's index in `cache` (`u32::MAX` for none).
+    pub cached: Vec<u32>,
+    /// Scratch of `solve::remember`: the held pairs' indices into `held`, in pair order.
+    pub by_pair: Vec<u32>,
+    /// Last step's anchors and impulses by pair, in pair order (found through `cached`).
+    pub cache: Vec<((u32, u32), CachedManifold)>,
+    /// The step these constraints belong to (`correct` uses them only if `solve` ran this step).
+    pub step: u64,
+    /// The free bodies of the constraints, each once, in solver-body order (the static slots
+    /// between the sides and at the end skipped).
+    pub moving: Vec<u32>,
+    /// Free bodies on the first side; solver body `left` is that side's static slot.
+    pub left: usize,
+    /// Scratch: each moving body's velocity, angular velocity, position and orientation after
+    /// the substeps, found in parallel and then written to the bodies.
+    pub after: Vec<(Vector, Vector, Vector, Quat)>,
+    /// Scratch: each free body's coordinate along the split, with its actor index.
+    pub keys: Vec<(u64, u32)>,
+    /// Each actor's solver-body slot (`u32::MAX` when not in a held pair this step; fixed
+    /// bodies map to the last static slot).
+    pub slot: Vec<u32>,
+    /// The solver bodies: the first side's free bodies, its static slot, the second side's,
+    /// the last static slot (`solver::build_constraints`).
+    pub bodies: Vec<SolverBody>,
+    /// Each actor's speculative distance this step (`Params::speculative_distances`).
+    pub speculative: Vec<Scalar>,
+    /// S = (I⁻¹)^½ in world axes of each solver body (zero for the static slots).
+    pub scale: Vec<Mat3>,
+}
