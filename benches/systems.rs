@@ -24,7 +24,7 @@ fn each_system(c: &mut Criterion) {
         let run = systems::find(name).expect("shipped").run;
         for &n in counts {
             let mut sim = rigid_sandbox::scene::benchmarks::box_gas_sim(n, 1);
-            sim.run(20).expect("finite"); // warm-up, as in BENCHMARKS.md
+            sim.run(20).expect("finite"); // warm-up, as in docs/benchmarks.md
             group.throughput(Throughput::Elements(u64::from(n)));
             group.bench_function(BenchmarkId::new(name, n), |b| {
                 b.iter_custom(|iters| {

@@ -1,9 +1,9 @@
-//! Typed errors per layer, and which of them are bad input (exit code 2, CONTRACTS.md §3).
+//! Typed errors per layer, and which of them are bad input (exit code 2, docs/cli.md).
 
 use miette::{NamedSource, SourceSpan};
 use std::path::PathBuf;
 
-/// Why a triangle mesh cannot be a body (PHYSICS.md §3.3).
+/// Why a triangle mesh cannot be a body (docs/physics.md §3.3).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshError {
     /// The mesh file could not be read or parsed.
@@ -108,11 +108,11 @@ pub enum SceneError {
         at: SourceSpan,
     },
     /// A value that parsed but is not allowed, found after parsing.
-    #[error("{}: actor '{}': {}: {}", .path.display(), .actor, .field, .reason)]
+    #[error("{}: {}{}: {}", .path.display(), subject(.actor), .field, .reason)]
     Invalid {
         /// The scene file.
         path: PathBuf,
-        /// The actor's name (or "scene" for scene-wide fields).
+        /// The actor's name (or "scene" for scene-wide fields, which name no actor).
         actor: String,
         /// The field.
         field: String,
@@ -176,4 +176,9 @@ pub enum ScheduleError {
         /// The name.
         name: String,
     },
+}
+
+/// The "actor 'x': " an `Invalid` error starts with, or nothing for a scene-wide field.
+fn subject(actor: &str) -> String {
+    if actor == "scene" { String::new() } else { format!("actor '{actor}': ") }
 }

@@ -1,23 +1,28 @@
 //! rigid-sandbox: a rigid-body dynamics sandbox after the paper "Rigid Body Dynamics
-//! Simulator Sandbox" (Phipps, Narayanan), with its errors corrected (PHYSICS.md §2).
+//! Simulator Sandbox" (Phipps, Narayanan), with its errors corrected (docs/physics.md §2).
 //!
 //! Actors are `hecs` entities with `Mesh`, `MassProps`, `Velocity`, `BoundingSphere`, `Pose`,
-//! `Material` and `Name` components. Each step runs an ordered list of named systems
-//! (`systems::default_schedule`), mirroring the paper's pipeline:
+//! `Material` and `Name` components. Each step loads them into plain arrays once, runs an
+//! ordered list of named systems (`systems::default_schedule`) mirroring the paper's
+//! pipeline, and stores them back once (ARCHITECTURE.md):
 //!
-//! 1. `cull` — bounding spheres give candidate pairs;
-//! 2. `prune` — candidates a separating axis proves apart are dropped (an early-out);
-//! 3. `face`, 4. `vertex`, 5. `edge` — the paper's three detection tests, first hit wins;
-//! 6. `gravity` — external forces change velocities;
-//! 7. `resolve` — the corrected impulse on each impact (the paper's model: no gravity, no
+//! 1. `cull`: bounding spheres give candidate pairs;
+//! 2. `prune`: candidates a separating axis proves apart are dropped (an early-out);
+//! 3. `face`, 4. `vertex`, 5. `edge`: the paper's three detection tests, first hit wins;
+//! 6. `gravity`: external forces change velocities;
+//! 7. `resolve`: the corrected impulse on each impact (the paper's model: no gravity, no
 //!    friction);
-//! 8. `solve` — resting contact, friction and impacts under gravity (idle without either);
-//! 9. `correct` — positional correction of penetration;
-//! 10. `integrate` — poses advance.
+//! 8. `solve`: resting contact, friction and impacts under gravity (idle without either);
+//! 9. `correct`: positional correction of penetration;
+//! 10. `sleep`: still bodies stop being simulated (off unless `Params::sleep`);
+//! 11. `integrate`: poses advance.
+//!
+//! The code is in one folder per part: `model` (what an actor is), `collision`, `sim` (the
+//! step), `solver` (the contact solver), `systems` (the stages), `scene`, `io` and `cli`.
 //!
 //! ```
 //! use rigid_sandbox::scene;
-//! // PHYSICS.md §4 (a): two unit cubes head-on, e = 1: they exchange velocities.
+//! // docs/physics.md §4 (a): two unit cubes head-on, e = 1: they exchange velocities.
 //! let text = r#"Scene(dt: 0.01, gravity: (0.0, 0.0, 0.0), actors: [
 //!     Actor(name: "a", shape: Box(size: (1.0, 1.0, 1.0)), mass: 1.0, restitution: 1.0,
 //!           position: (-1.0975, 0.0, 0.0), velocity: (1.0, 0.0, 0.0)),

@@ -1,6 +1,6 @@
 //! Numeric types and rotations. The engine is f64 throughout, and only this file names glam.
 //!
-//! Conventions (CONTRACTS.md §1, PHYSICS.md §0): SI units, radians inside, +y up, right-handed;
+//! Conventions (docs/physics.md §0): SI units, radians inside, +y up, right-handed;
 //! quaternions map body to world; scene Euler angles mean R = Rz(γ)·Ry(β)·Rx(α).
 
 /// The one floating-point type of the engine.
@@ -13,11 +13,11 @@ pub type Quat = glam::DQuat;
 pub type Mat3 = glam::DMat3;
 
 /// Below this rotation angle [rad] the exponential map uses its first-order form, as
-/// PHYSICS.md §0 prescribes, so `sin(θ/2)/θ` is never evaluated at 0.
+/// docs/physics.md §0 prescribes, so `sin(θ/2)/θ` is never evaluated at 0.
 pub const SMALL_ANGLE: Scalar = 1e-12;
 
 /// World-frame inverse inertia R I⁻¹ Rᵀ [1/(kg·m²)]. The paper applies the body-frame
-/// tensor directly, which is wrong as soon as the body has turned (PHYSICS.md E9).
+/// tensor directly, which is wrong as soon as the body has turned (docs/physics.md E9).
 #[must_use]
 pub fn world_inverse_inertia(orientation: Quat, inv_inertia_body: Mat3) -> Mat3 {
     let r = Mat3::from_quat(orientation);
@@ -25,7 +25,7 @@ pub fn world_inverse_inertia(orientation: Quat, inv_inertia_body: Mat3) -> Mat3 
 }
 
 /// The rotation by the rotation vector `theta` (axis × angle [rad]): the exponential map of
-/// PHYSICS.md §0, `(cos(|θ|/2), sin(|θ|/2) θ/|θ|)`.
+/// docs/physics.md §0, `(cos(|θ|/2), sin(|θ|/2) θ/|θ|)`.
 #[must_use]
 pub fn exp_map(theta: Vector) -> Quat {
     let angle = theta.length();
@@ -39,7 +39,7 @@ pub fn exp_map(theta: Vector) -> Quat {
 }
 
 /// The orientation of a scene's `rotation: (rx, ry, rz)` [degrees]: R = Rz·Ry·Rx, i.e. rotate
-/// about world x, then world y, then world z (CONTRACTS.md §1; the paper leaves the order open).
+/// about world x, then world y, then world z (docs/physics.md §0; the paper leaves the order open).
 #[must_use]
 pub fn from_euler_degrees(degrees: Vector) -> Quat {
     let r = degrees * (std::f64::consts::PI / 180.0);
@@ -98,7 +98,7 @@ mod tests {
 
     #[test]
     fn world_inverse_inertia_rotates_the_rod_of_case_c2() {
-        // PHYSICS.md §4 (c2): rod along x turned by Ry(90°) has its small moment along z.
+        // docs/physics.md §4 (c2): rod along x turned by Ry(90°) has its small moment along z.
         let inv = Mat3::from_diagonal(Vector::new(150.0, 300.0 / 101.0, 300.0 / 101.0));
         let w = world_inverse_inertia(from_euler_degrees(Vector::new(0.0, 90.0, 0.0)), inv);
         assert!((w.z_axis.z - 150.0).abs() < 1e-12);

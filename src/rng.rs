@@ -1,4 +1,4 @@
-//! SplitMix64, bit for bit as BENCHMARKS.md defines it: every seeded spawner draws from it, so
+//! SplitMix64, bit for bit as docs/benchmarks.md defines it: every seeded spawner draws from it, so
 //! a scene is the same on every machine and run (never system entropy).
 
 /// The SplitMix64 generator.

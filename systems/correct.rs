@@ -1,4 +1,4 @@
-//! `correct`: positional correction of penetration (PHYSICS.md §2.6, erratum E14). Moves
+//! `correct`: positional correction of penetration (docs/physics.md §2.6, erratum E14). Moves
 //! positions only: velocities, momentum and kinetic energy are untouched.
 
 use crate::collision::contact::Pair;
@@ -21,7 +21,7 @@ pub fn correction(depth: Scalar, thickness: Scalar, params: &Params) -> Scalar {
 ///
 /// - Reads: `ctx.pairs` (`Found`, `Resolved`), `ctx.bodies`, `ctx.meshes`.
 /// - Writes: `ctx.bodies` positions; marks moved bodies for re-posing.
-/// - Paper: none (the paper leaves overlaps in place: E14); PHYSICS.md §2.6.
+/// - Paper: none (the paper leaves overlaps in place: E14); docs/physics.md §2.6.
 /// - Cost: O(C) for C contacts.
 pub fn correct(_world: &mut World, ctx: &mut StepContext) {
     // The pairs `solve` held this step: its soft contacts push their penetration out.

@@ -1,5 +1,5 @@
 //! `cull`: the broad phase. Bounding spheres about the centre of mass overlap
-//! (PHYSICS.md §1.2, erratum E1). Two systems share the predicate and emit the same sorted pair
+//! (docs/physics.md §1.2, erratum E1). Two systems share the predicate and emit the same sorted pair
 //! list: `cull_all_pairs`, the paper's O(N²) loop kept as the reference, and `cull`, a uniform
 //! grid, near-linear in N.
 
@@ -21,7 +21,7 @@ pub fn spheres_overlap(xa: Vector, ra: Scalar, xb: Vector, rb: Scalar) -> bool {
 /// pairs of two fixed actors (they never move, so never need an impulse).
 ///
 /// - Reads: `ctx.bodies`. Writes: `ctx.pairs` (appends `Candidate`s, sorted), `ctx.stats`.
-/// - Paper: bounding box check; PHYSICS.md §1.2, E1. Cost: O(N²).
+/// - Paper: bounding box check; docs/physics.md §1.2, E1. Cost: O(N²).
 pub fn cull_all_pairs(_world: &mut World, ctx: &mut StepContext) {
     reach(ctx);
     let (b, reach) = (&ctx.bodies, &ctx.scratch.get_mut::<CullScratch>().reach);
@@ -51,6 +51,9 @@ const LARGE_RADIUS_FACTOR: Scalar = 4.0;
 /// The grid may have at most this many cells per ordinary body (memory bound for sparse
 /// scenes: the cell grows until it fits).
 const CELLS_PER_BODY: usize = 4;
+/// Most cells along one axis while the cell size is being found (any larger count is cut
+/// down by the size search anyway).
+const MAX_DIM: Scalar = (1u64 << 32) as Scalar;
 /// Bodies per parallel work chunk of the pair search: small enough that the rain's 1 000 cubes
 /// make four (its cull went from 0.33 to 0.23 ms on two threads), the chunks' pairs joined
 /// in order, so the list is the same for any count.
@@ -60,7 +63,7 @@ const CHUNK: usize = 256;
 /// `cull_all_pairs`.
 ///
 /// - Reads: `ctx.bodies`. Writes: `ctx.pairs`, `ctx.stats`, its `CullScratch`.
-/// - Paper: bounding box check (its all-pairs loop replaced; DESIGN.md §6 says why a grid and
+/// - Paper: bounding box check (its all-pairs loop replaced; ARCHITECTURE.md says why a grid and
 ///   not sweep-and-prune: box-gas's slabs of equal cubes overlap on any one axis).
 /// - Cost: O(N) to bin, O(N·k) for k neighbours per body, plus O(N·L) for L large bodies.
 pub fn cull(_world: &mut World, ctx: &mut StepContext) {
@@ -130,10 +133,17 @@ impl Grid {
         // least that wide, they sit in the same or neighbouring cells.
         let mut cell = (2.0 * r_max).max(Scalar::MIN_POSITIVE);
         let extent = if count == 0 { Vector::ZERO } else { hi - lo };
-        let dims_for = |cell: Scalar| (extent / cell).to_array().map(|e| e.floor() as usize + 1);
+        // Capped before the cast: a scene 1e20 m across must not overflow the cell count.
+        let dims_for = |cell: Scalar| (extent / cell).to_array().map(|e| e.floor().min(MAX_DIM) as usize + 1);
+        let cells_for = |d: [usize; 3]| d.iter().fold(1_usize, |n, &k| n.saturating_mul(k));
         let mut dims = dims_for(cell);
-        while dims.iter().product::<usize>() > CELLS_PER_BODY * count.max(1) {
+        while cells_for(dims) > CELLS_PER_BODY * count.max(1) {
             cell *= 1.5;
+            if !cell.is_finite() {
+                // Spread over more than f64 can span: one cell holds them all.
+                (cell, dims) = (Scalar::MAX, [1; 3]);
+                break;
+            }
             dims = dims_for(cell);
         }
         let grid = Self { origin: lo, cell, dims, threshold };

@@ -1,5 +1,5 @@
 //! `edge`: the paper's edge test. An edge of one body crossing the other
-//! (PHYSICS.md §1.5, erratum E4).
+//! (docs/physics.md §1.5, erratum E4).
 
 use crate::collision::contact::{Contact, Feature};
 use crate::collision::posed::{Posed, clip_segment, depth_along};
@@ -11,7 +11,7 @@ use hecs::World;
 /// passes through (nearly) parallel faces and the closest-face fallback gives the normal.
 const PARALLEL_PLANES: Scalar = 1e-9;
 /// The closest face wins over the edge-edge normal when penetration along the edge-edge normal
-/// is more than this many times the penetration along the face normal. In PHYSICS.md §4 (f2)
+/// is more than this many times the penetration along the face normal. In docs/physics.md §4 (f2)
 /// the ratio is √2 (a true ridge crossing); a misread shallow contact gives 100 or more.
 const SHALLOW_FACE: Scalar = 2.0;
 
@@ -19,7 +19,7 @@ const SHALLOW_FACE: Scalar = 2.0;
 ///
 /// - Reads: `ctx.pairs` (`Candidate` only), `ctx.posed`.
 /// - Writes: `ctx.pairs` (`Candidate` → `Found`), `ctx.posed` (fills the cache).
-/// - Paper: edge test; PHYSICS.md §1.5 and erratum E4.
+/// - Paper: edge test; docs/physics.md §1.5 and erratum E4.
 /// - Cost: O(E_A·F_B + E_B·F_A) per candidate pair (clipping, not the paper's sort).
 pub fn edge(_world: &mut World, ctx: &mut StepContext) {
     super::face::detect(ctx, edge_contact, Feature::Edge);
@@ -52,11 +52,10 @@ pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
         };
         let face = b.closest_face_normal(point, a);
         let normal = match crossing {
-            // The entry and exit planes meet in B's edge only if the segment passes near that
-            // edge. An edge of A lying just under a face of B (a box resting across two others,
-            // as in a pyramid) enters and leaves through two side faces whose common line is
-            // far away; the edge-edge normal is then horizontal with a depth of a whole body,
-            // while the face above is a hair away. Take the face when it is the clear minimum.
+            // The entry and exit planes meet in B's edge only if the segment passes near it. An
+            // edge of A just under a face of B (a box across two others in a pyramid) crosses
+            // two side faces instead, giving a sideways normal a whole body deep: take the
+            // face when it is the clear minimum (§6.5).
             Some(n) if depth_along(a, b, n) > SHALLOW_FACE * depth_along(a, b, face) + b.tolerance() => face,
             Some(n) => n,
             None => face,
@@ -81,7 +80,7 @@ mod tests {
 
     #[test]
     fn crossing_ridges_give_the_vertical_edge_edge_normal() {
-        // PHYSICS.md §4 (f2), x_A = 0.25: p = (0.25, √2/2 − 0.01, 0), n = (0, 1, 0).
+        // docs/physics.md §4 (f2), x_A = 0.25: p = (0.25, √2/2 − 0.01, 0), n = (0, 1, 0).
         let h = 2f64.sqrt();
         let a = cube(Vector::new(0.25, h - 0.01, 0.0), Vector::new(0.0, 0.0, 45.0));
         let b = cube(Vector::ZERO, Vector::new(45.0, 0.0, 0.0));

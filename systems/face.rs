@@ -1,5 +1,5 @@
 //! `face`: the paper's face test. Triangle centroids of one body inside the other
-//! (PHYSICS.md §1.3, errata E2 and E3).
+//! (docs/physics.md §1.3, errata E2 and E3).
 
 use crate::collision::contact::{Contact, Feature, PairState};
 use crate::collision::posed::{Posed, depth_along, is_inside};
@@ -16,13 +16,13 @@ const CANCELLED_NORMAL: Scalar = 1e-6;
 ///
 /// - Reads: `ctx.pairs` (`Candidate` only), `ctx.posed`.
 /// - Writes: `ctx.pairs` (`Candidate` → `Found`), `ctx.posed` (fills the cache).
-/// - Paper: face test; PHYSICS.md §1.3, errata E2, E3; order of §1.6.
+/// - Paper: face test; docs/physics.md §1.3, errata E2, E3; order of §1.6.
 /// - Cost: O(F_A·F_B) per candidate pair.
 pub fn face(_world: &mut World, ctx: &mut StepContext) {
     detect(ctx, face_contact, Feature::Face);
 }
 
-/// Runs `kernel` both ways on every candidate pair and records the first hit (PHYSICS.md
+/// Runs `kernel` both ways on every candidate pair and records the first hit (docs/physics.md
 /// §1.6): the (B, A) result has its normal flipped so it still points from B to A.
 pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option<Contact>, feature: Feature) {
     ctx.pose_candidates();
@@ -82,7 +82,7 @@ mod tests {
 
     #[test]
     fn head_on_cubes_give_the_face_centre_and_a_normal_from_b_to_a() {
-        // PHYSICS.md §4 (a): A at x = −0.99 into B at 0: p = (−0.49, 0, 0), n = (−1, 0, 0).
+        // docs/physics.md §4 (a): A at x = −0.99 into B at 0: p = (−0.49, 0, 0), n = (−1, 0, 0).
         let a = cube(Vector::ONE, Vector::new(-0.99, 0.0, 0.0));
         let b = cube(Vector::ONE, Vector::ZERO);
         let c = face_contact(&a, &b).expect("A's +x face is inside B");

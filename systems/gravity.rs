@@ -10,7 +10,7 @@ use hecs::World;
 ///
 /// - Reads: `ctx.params.gravity`, `ctx.dt`, `ctx.bodies`.
 /// - Writes: `ctx.bodies` velocities.
-/// - Paper: none (the paper has no forces); PHYSICS.md §2.7, linear part.
+/// - Paper: none (the paper has no forces); docs/physics.md §2.7, linear part.
 /// - Cost: O(N).
 pub fn gravity(_world: &mut World, ctx: &mut StepContext) {
     let dv = ctx.params.gravity * ctx.dt;

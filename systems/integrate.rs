@@ -1,12 +1,12 @@
-//! `integrate`: advances velocities and poses by one step (PHYSICS.md §2.7, errata E15, E16).
+//! `integrate`: advances velocities and poses by one step (docs/physics.md §2.7, errata E15, E16).
 //!
 //! Linear: semi-implicit (symplectic) Euler: `gravity` did `v += g·dt` before the contacts,
 //! this does `x += v·dt`.
 //! Angular: torque-free, so the world angular momentum L is constant; the orientation moves by
 //! the symplectic splitting of §2.7 with L fixed, and ω is recomputed from L at the new
-//! orientation. (The midpoint scheme is also correct but drifts the flip times of §4 (e) by
-//! 0.3 %, ten times more.) The paper keeps ω constant and applies it as Euler-angle increments,
-//! which never shows the intermediate-axis flip and drifts L by 6 % (E15, E16).
+//! orientation (§2.7 compares it with the midpoint scheme and others). The paper keeps ω
+//! constant and applies it as Euler-angle increments, which never shows the intermediate-axis
+//! flip and drifts L (E15, E16).
 
 use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::rotate_tensor;
@@ -14,7 +14,7 @@ use crate::sim::context::StepContext;
 use hecs::World;
 use rayon::prelude::*;
 
-/// One torque-free rotation step with the world angular momentum L fixed (PHYSICS.md §2.7),
+/// One torque-free rotation step with the world angular momentum L fixed (docs/physics.md §2.7),
 /// returning the new orientation and ω.
 ///
 /// Isotropic bodies (equal principal moments) keep ω, and turn exactly by `exp(ω dt)`.
@@ -28,7 +28,7 @@ use rayon::prelude::*;
 /// q' = q_p ⊗ P⁻¹;   ω' = R(q_p) Λ⁻¹ R(q_p)ᵀ L
 /// ```
 /// Each sub-step is an exact rotation and L is never changed, so L is kept to round-off and
-/// the energy error stays bounded (≤ 1e-4 at dt = 1/60 on §4 (e), flip times ±0.002 s).
+/// the energy error stays bounded (docs/physics.md §2.7).
 #[must_use]
 pub fn rotate_free(q: Quat, omega: Vector, axes: Quat, moments: Vector, dt: Scalar) -> (Quat, Vector) {
     if moments.x == moments.y && moments.y == moments.z {
@@ -50,21 +50,21 @@ pub fn rotate_free(q: Quat, omega: Vector, axes: Quat, moments: Vector, dt: Scal
 /// - Reads: `ctx.bodies`, `ctx.dt`.
 /// - Writes: `ctx.bodies` poses, velocities, world inverse inertia; marks
 ///   every body for re-posing.
-/// - Paper: integration; PHYSICS.md §2.7, errata E15, E16.
+/// - Paper: integration; docs/physics.md §2.7, errata E15, E16.
 /// - Cost: O(N), in parallel, each row written by one thread.
 pub fn integrate(_world: &mut World, ctx: &mut StepContext) {
     let dt = ctx.dt;
     let b = &mut ctx.bodies;
     let rows = b.position.par_iter_mut().zip(b.orientation.par_iter_mut()).zip(b.velocity.par_iter());
     let rest = b.angular_velocity.par_iter_mut().zip(b.inv_inertia_world.par_iter_mut()).zip(b.rotation.par_iter_mut());
-    let fixed = (&b.inv_mass, &b.principal_axes, &b.principal_moments, &b.inv_inertia_body);
+    let props = (&b.inv_mass, &b.principal_axes, &b.principal_moments, &b.inv_inertia_body);
     rows.zip(rest).enumerate().for_each(|(i, (((x, q), v), ((w, inv_w), rotation)))| {
-        if fixed.0[i] == 0.0 {
+        if props.0[i] == 0.0 {
             return;
         }
         *x += *v * dt;
-        (*q, *w) = rotate_free(*q, *w, fixed.1[i], fixed.2[i], dt);
-        *inv_w = rotate_tensor(*q, fixed.3[i]);
+        (*q, *w) = rotate_free(*q, *w, props.1[i], props.2[i], dt);
+        *inv_w = rotate_tensor(*q, props.3[i]);
         *rotation = Mat3::from_quat(*q);
     });
     for i in 0..ctx.bodies.len() {

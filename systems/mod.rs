@@ -1,8 +1,9 @@
 //! The pipeline's stages, one file each. The default schedule follows the paper's
-//! "Algorithm Overview", one system per stage (DESIGN.md §5):
+//! "Algorithm Overview", one system per stage (ARCHITECTURE.md):
 //!
 //! 1. `cull` — bounding-sphere test gives candidate pairs (paper: bounding box check;
-//!    PHYSICS.md §1.2, erratum E1). A uniform grid; `cull_all_pairs` is the paper's O(N²) loop.
+//!    docs/physics.md §1.2, erratum E1). A uniform grid; `cull_all_pairs` is the paper's O(N²)
+//!    loop.
 //! 2. `prune` — drops candidates that a separating plane proves apart, so the paper's tests
 //!    below only see pairs they could fire on (they still decide every contact).
 //! 3. `face` — triangle centroids inside the other body (§1.3, errata E2, E3).
@@ -15,7 +16,7 @@
 //!    work; idle without gravity and friction).
 //! 9. `correct` — positional correction of penetration (§2.6, E14).
 //! 10. `sleep` — bodies still for half a second sleep until touched in motion (off unless
-//!     `Params::sleep`). Before `integrate`, which the paper's stages end with (CONTRACTS.md).
+//!     `Params::sleep`). Before `integrate`, which the paper's stages end with (docs/cli.md).
 //! 11. `integrate` — poses from velocities; angular momentum kept (§2.7, E15, E16).
 
 mod correct;

@@ -22,7 +22,7 @@ pub const PRUNE_MARGIN: Scalar = 1e-6;
 const MAX_EDGE_AXES: usize = 64;
 
 /// Added to |Rᵢⱼ| in the box test so that near-parallel edges, whose cross product is nearly
-/// zero and numerically meaningless, can never prove a separation (Ericsson, RTCD §4.4.1).
+/// zero and numerically meaningless, can never prove a separation (Ericson, RTCD §4.4.1).
 const PARALLEL_SLACK: Scalar = 1e-9;
 
 /// True when an axis separates the two convex bodies by more than the margin: a world axis
@@ -65,7 +65,7 @@ pub struct BoxPose {
 }
 
 /// The separating-axis test of two oriented boxes over its 15 axes (3 + 3 face normals, 9
-/// edge cross products; Gottschalk 1996, Ericsson RTCD §4.4.1), in A's frame, from the poses
+/// edge cross products; Gottschalk 1996, Ericson RTCD §4.4.1), in A's frame, from the poses
 /// alone: the same proof as `separated`, without touching vertices, which at 64 000 cubes is
 /// what costs. For two margins at once, `[wide, proof]` with `wide ≥ proof`: whether some axis
 /// shows a gap larger than each. One pass over the axes, stopping at the first that proves the
@@ -157,10 +157,9 @@ fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
 
 /// Drops the candidate pairs proved apart, and marks `Near` those proved apart by less than
 /// the contact margin (kept for `solve`, skipped by the tests), so later systems walk only
-/// pairs that may touch
-/// (at 64 000 box-gas cubes: 2 400 of 267 000 sphere candidates). The broad phase's count stays
-/// in `ctx.stats.candidates`. Box–box pairs are tested from their poses (`boxes_separated_by`)
-/// before anything is posed; the rest by `separated` on posed meshes.
+/// pairs that may touch. The broad phase's count stays in `ctx.stats.candidates`. Box–box
+/// pairs are tested from their poses (`boxes_separated_by`) before anything is posed; the rest
+/// by `separated` on posed meshes.
 ///
 /// - Reads: `ctx.pairs` (`Candidate` only), `ctx.bodies`, `ctx.meshes`, `ctx.posed`.
 /// - Writes: `ctx.pairs` (removes separated pairs, keeps order; `Candidate` → `Near`),
@@ -246,7 +245,7 @@ mod tests {
 
     #[test]
     fn crossed_ridges_apart_are_found_only_on_an_edge_axis() {
-        // PHYSICS.md §4 (f2) geometry lifted 0.02 above touching: the ridges are 0.01 apart,
+        // docs/physics.md §4 (f2) geometry lifted 0.02 above touching: the ridges are 0.01 apart,
         // which no face normal and not the line of centres can show (offset along x).
         let h = 2f64.sqrt();
         let b = pose(Vector::ZERO, Vector::new(45.0, 0.0, 0.0));

@@ -1,13 +1,13 @@
-//! `resolve`: the corrected impulse of the paper's "Collision Resolution" (PHYSICS.md §2.5,
+//! `resolve`: the corrected impulse of the paper's "Collision Resolution" (docs/physics.md §2.5,
 //! errata E9–E13), applied by sequential sweeps over the step's contacts.
 //!
 //! Contact model: one contact per pair per step; pairs are swept in (a, b) order with the
 //! current velocities, and sweeps repeat until one applies no impulse or `max_sweeps` is
-//! reached. This is the "pairwise sequential" model of PHYSICS.md §4 (g): a Newton's cradle of
+//! reached. This is the "pairwise sequential" model of docs/physics.md §4 (g): a Newton's cradle of
 //! touching cubes ends (0, 0, 0, 0, 1). A pair's restitution is the mean of its two actors'.
 //!
 //! It takes the pairs `solve` leaves: those of scenes without gravity and without friction,
-//! the paper's model (PHYSICS.md §4). Under gravity or with friction `solve` holds the pair
+//! the paper's model (docs/physics.md §4). Under gravity or with friction `solve` holds the pair
 //! and bounces its impacts itself, over the whole manifold. Only contacts approaching faster
 //! than the restitution threshold get an impulse (zero without gravity unless a scene sets
 //! one).
@@ -79,7 +79,7 @@ pub fn collision_impulse(a: &BodyState, b: &BodyState, contact: &Contact, restit
 /// - Reads: `ctx.pairs` (`Found`, `Resolved`), `ctx.bodies`.
 /// - Writes: `ctx.bodies` velocities, `ctx.pairs` (`Found` → `Resolved`),
 ///   `ctx.stats` (impulses by feature, sweeps).
-/// - Paper: collision resolution; PHYSICS.md §2.5, errata E9–E13.
+/// - Paper: collision resolution; docs/physics.md §2.5, errata E9–E13.
 /// - Cost: O(C) per sweep for C contacts, at most `max_sweeps` sweeps.
 pub fn resolve(_world: &mut World, ctx: &mut StepContext) {
     let threshold = ctx.params.restitution_threshold(ctx.dt);
@@ -139,7 +139,7 @@ mod tests {
 
     #[test]
     fn off_centre_hit_on_the_rod_matches_case_c() {
-        // PHYSICS.md §4 (c), e = 1: j = 202/445, v_A' = −243/445, v_B' = −202/445,
+        // docs/physics.md §4 (c), e = 1: j = 202/445, v_A' = −243/445, v_B' = −202/445,
         // ω_B' = −108/89 about z.
         let inv_rod = Mat3::from_diagonal(Vector::new(150.0, 300.0 / 101.0, 300.0 / 101.0));
         let mut a = body(Vector::new(0.9, 0.14, 0.0), -Vector::Y, 1.0, Mat3::IDENTITY * 600.0);

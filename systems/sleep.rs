@@ -8,9 +8,9 @@ use crate::math::Vector;
 use crate::sim::context::{SleepState, StepContext};
 use hecs::World;
 
-/// Below this speed [m/s] (linear, and of the bounding sphere's rim) a body counts as still
-/// (Box2D's default is 0.01 m/s; a 40-row pyramid on soft contacts sways at a few mm/s, which
-/// must not keep it awake).
+/// Below this speed [m/s] (linear, and of the bounding sphere's rim) a body counts as still.
+/// Above Box2D's 0.01 m/s: a tall pyramid on soft contacts sways slowly, which must not keep
+/// it awake.
 pub const STILL_SPEED: f64 = 0.05;
 
 /// A body still for this long [s], with every moving body it touches also still as long,

@@ -1,5 +1,5 @@
 //! `vertex`: the paper's vertex test. Vertices of one body inside the other
-//! (PHYSICS.md §1.4, erratum E5).
+//! (docs/physics.md §1.4, erratum E5).
 
 use crate::collision::contact::{Contact, Feature};
 use crate::collision::posed::{Posed, depth_along};
@@ -11,7 +11,7 @@ use hecs::World;
 ///
 /// - Reads: `ctx.pairs` (`Candidate` only), `ctx.posed`.
 /// - Writes: `ctx.pairs` (`Candidate` → `Found`), `ctx.posed` (fills the cache).
-/// - Paper: vertex test; PHYSICS.md §1.4 and erratum E5.
+/// - Paper: vertex test; docs/physics.md §1.4 and erratum E5.
 /// - Cost: O(V_A·F_B + V_B·F_A) per candidate pair.
 pub fn vertex(_world: &mut World, ctx: &mut StepContext) {
     super::face::detect(ctx, vertex_contact, Feature::Vertex);

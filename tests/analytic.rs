@@ -1,4 +1,4 @@
-//! The analytic cases of PHYSICS.md §4, in unit form (bodies placed overlapping by 0.01,
+//! The analytic cases of docs/physics.md §4, in unit form (bodies placed overlapping by 0.01,
 //! one detection + resolution, 1e-9) and scene form (the shipped scene run until the first
 //! impulse), with the conservation checks of §4 (d) and the actor-order swap (T-swap).
 
@@ -223,7 +223,7 @@ fn swapping_actor_order_gives_the_same_physics() {
 
 #[test]
 fn every_collision_conserves_momentum_and_angular_momentum_and_obeys_restitution() {
-    // PHYSICS.md §4 (d), on the unit form: totals before and after the impulse.
+    // docs/physics.md §4 (d), on the unit form: totals before and after the impulse.
     for case in CASES {
         let mut sim = unit_form(case, false);
         let before = sim.totals();
@@ -295,7 +295,7 @@ fn head_on_with_both_moving_reverses_both() {
 
 #[test]
 fn newtons_cradle_passes_the_velocity_to_the_last_cube_in_one_step() {
-    // PHYSICS.md §4 (g), pairwise sequential sweeps: (0, 0, 0, 0, 1) after the first step.
+    // docs/physics.md §4 (g), pairwise sequential sweeps: (0, 0, 0, 0, 1) after the first step.
     let mut sim = sim_of("newtons-cradle.ron", |_| {});
     sim.step().expect("finite");
     let v: Vec<f64> = sim.actors().iter().map(|a| a.velocity.linear.x).collect();

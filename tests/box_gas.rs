@@ -1,5 +1,5 @@
 //! Many bodies, all colliding, e = 1, in a closed box: the kinetic energy is kept, no cube
-//! escapes, and nothing goes non-finite (issue #4; BENCHMARKS.md's box-gas at small N).
+//! escapes, and nothing goes non-finite (issue #4; docs/benchmarks.md's box-gas at small N).
 
 use rigid_sandbox::scene::benchmarks::box_gas_sim;
 use rigid_sandbox::scene::spawners::box_gas_half_extent;

@@ -1,4 +1,4 @@
-//! The `rigid` binary through its contract (CONTRACTS.md §3–5): exit codes, error positions,
+//! The `rigid` binary through its contract (docs/cli.md): exit codes, error positions,
 //! the JSON and CSV files, and mass properties of every shape read back from `--out`.
 
 use std::path::Path;
@@ -201,7 +201,7 @@ fn bench_json_has_the_fields_of_benchmarks_md_and_the_scene_check_value() {
         assert!(!r[field].is_null(), "missing {field}: {r}");
     }
     assert_eq!((r["scene"].as_str(), r["steps"].as_u64(), r["threads"].as_u64()), (Some("box-gas"), Some(2), Some(1)));
-    // BENCHMARKS.md: total kinetic energy at start for N = 1000 is 2104.5686 J.
+    // docs/benchmarks.md: total kinetic energy at start for N = 1000 is 2104.5686 J.
     assert!((r["ke_start"].as_f64().expect("number") - 2104.5686).abs() < 1e-4, "{}", r["ke_start"]);
     let systems = r["systems_ms"].as_object().expect("per-system times");
     for name in ["cull", "face", "vertex", "edge", "resolve", "integrate"] {

@@ -1,4 +1,4 @@
-//! Property tests of the impulse kernel (PHYSICS.md §4 (d), random property test): random
+//! Property tests of the impulse kernel (docs/physics.md §4 (d), random property test): random
 //! masses, inertias, contact geometry and restitution; momentum, angular momentum, Newton's
 //! restitution law and the energy change all hold.
 

@@ -52,9 +52,9 @@ fn slope(theta_deg: f64, mu: f64, dt: f64) -> rigid_sandbox::sim::Sim {
 #[test]
 fn coulomb_holds_at_every_slope_angle_either_side_of_atan_mu() {
     // Slopes from 10° to 40° (a unit cube tips at 45°), μ 2 % either side of tan θ: 2 % more
-    // holds the block within 1 mm over 2 s (at 60 and 120 steps a second: the slip before the
-    // first step's friction takes hold grows as dt², 0.55 mm at 40° and 60 Hz), 2 % less lets
-    // it slide at g(sin θ − μ cos θ) within 2 %.
+    // holds the block within 1 mm over 2 s at 60 and 120 steps a second (the slip before the
+    // first step's friction takes hold grows as dt²), 2 % less lets it slide at
+    // g(sin θ − μ cos θ) within 2 %.
     for theta_deg in [10.0, 25.0, 40.0_f64] {
         let (t, dt) = (theta_deg.to_radians(), 1.0 / 60.0);
         let down = Vector::new(-t.cos(), -t.sin(), 0.0);
@@ -86,9 +86,8 @@ fn a_dropped_box_comes_to_rest_flat_and_stays() {
         "at rest within 1 s: {:?}",
         rest.velocity
     );
-    // It lands flat and stays flat: within 0.01° (the contact solver stops the four corners
-    // one after another within a substep, which leaves a twist of about 1e-4 rad; a corner
-    // lifted by that is 0.05 mm).
+    // It lands flat and stays flat, but for a small twist: the contact solver stops the four
+    // corners one after another within a substep.
     let tilt = rest.pose.orientation.angle_between(rigid_sandbox::math::Quat::IDENTITY);
     assert!(tilt < 2e-4, "rotated by {tilt} rad");
     let penetration = 0.5 - rest.pose.position.y;
@@ -117,7 +116,7 @@ fn a_tower_of_ten_boxes_stands_for_ten_seconds() {
 #[test]
 fn a_tower_of_ten_stands_at_a_longer_step_too() {
     // At 1/30 s the default substeps double (`Params::substeps_for`), so the contacts are as
-    // stiff as at 1/60 s: with 4 substeps this tower sank 3 cm.
+    // stiff as at 1/60 s and the tower sinks no deeper than there.
     let moved = tower_top_moved(1.0 / 30.0, 300);
     assert!(moved < 0.01, "the top box moved {moved} m");
 }
@@ -143,7 +142,7 @@ fn a_tower_of_twenty_boxes_does_not_buckle() {
 
 #[test]
 fn a_rain_of_cubes_comes_to_rest_in_its_box() {
-    // The rain scene of BENCHMARKS.md with 100 cubes: dropped from 10 m to 18 m, they land at
+    // The rain scene of docs/benchmarks.md with 100 cubes: dropped from 10 m to 18 m, they land at
     // up to 19 m/s, pile up and are still within 10 s, none through the floor.
     let mut sim = sim_from_text("Scene(actors: [], spawners: [Rain(actors: 100, seed: 1)])");
     sim.run(600).expect("finite");
@@ -187,7 +186,7 @@ fn without_gravity_and_friction_the_contact_solver_is_idle() {
     assert_eq!(sim.impulses, [1, 0, 0]);
 }
 
-/// The pyramid of BENCHMARKS.md with `base` rows, sleeping on.
+/// The pyramid of docs/benchmarks.md with `base` rows, sleeping on.
 fn sleeping_pyramid(base: u32) -> rigid_sandbox::sim::Sim {
     let mut sim =
         rigid_sandbox::scene::benchmarks::scene_sim(rigid_sandbox::scene::benchmarks::BenchScene::Pyramid, base, 1);

@@ -1,4 +1,4 @@
-//! Free rotation (PHYSICS.md §4 (e), T-rot): the integrator keeps the angular momentum
+//! Free rotation (docs/physics.md §4 (e), T-rot): the integrator keeps the angular momentum
 //! vector, keeps the energy within 1e-3 at dt = 1/60, and flips a box spun about its
 //! intermediate axis at the times an accurate reference predicts.
 
@@ -7,7 +7,7 @@ use common::*;
 use rigid_sandbox::math::{Quat, Vector};
 
 /// Body-frame Euler equations I ω̇ = (I ω) × ω for diagonal I, by RK4 with a small step: the
-/// reference for the flip times (PHYSICS.md §4 (e) allows an RK4 reference at dt = 1e-4).
+/// reference for the flip times (docs/physics.md §4 (e) allows an RK4 reference at dt = 1e-4).
 fn reference_flips(inertia: Vector, omega0: Vector, t_end: f64, h: f64) -> Vec<f64> {
     let f = |w: Vector| (inertia * w).cross(w) / inertia;
     let (mut w, mut t, mut flips) = (omega0, 0.0, Vec::new());
@@ -60,8 +60,8 @@ fn intermediate_axis_box_keeps_l_and_energy_and_flips_on_time() {
     assert!(want.len() >= 3, "the reference flips several times in 12 s: {want:?}");
     assert_eq!(flips.len(), want.len(), "flips {flips:?} vs reference {want:?}");
     for (got, want) in flips.iter().zip(&want) {
-        // The splitting scheme at dt = 1/60 flips within ±0.002 s (PHYSICS.md §2.7); the crossing
-        // times are interpolated between steps, so 3 ms is a tight bound (a fifth of a step).
+        // The splitting scheme at dt = 1/60 flips within ±0.002 s (docs/physics.md §2.7); flip
+        // times are interpolated between steps, so 3 ms (a fifth of a step) is a tight bound.
         assert!((got - want).abs() <= 3e-3, "flip at {got} s, reference {want} s");
     }
 }
@@ -80,7 +80,7 @@ fn constant_spin_of_an_isotropic_cube_matches_the_exponential_map() {
 
 #[test]
 fn falling_body_follows_the_discrete_semi_implicit_euler_solution() {
-    // v_n = v0 + n g dt, x_n = x0 + n v0 dt + ½ n(n+1) g dt² (STYLE.md §7).
+    // v_n = v0 + n g dt, x_n = x0 + n v0 dt + ½ n(n+1) g dt² (docs/physics.md §2.7).
     let mut sim =
         sim_from_text("Scene(dt: 0.01, actors: [Actor(shape: Tetrahedron(edge: 1.0), velocity: (0.0, 2.0, 0.0))])");
     sim.run(100).expect("finite");

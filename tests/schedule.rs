@@ -16,7 +16,8 @@ fn census(_world: &mut hecs::World, ctx: &mut StepContext) {
     CENSUS.fetch_add(1000 + ctx.pairs.len(), std::sync::atomic::Ordering::SeqCst);
 }
 
-/// A user system that stops everything: zeroes every velocity (and writes the world back).
+/// A user system that stops everything: zeroes every velocity in `ctx.bodies`, which the step
+/// stores back to the world.
 fn freeze(_world: &mut hecs::World, ctx: &mut StepContext) {
     ctx.bodies.velocity.iter_mut().for_each(|v| *v = rigid_sandbox::math::Vector::ZERO);
 }
@@ -77,7 +78,7 @@ fn a_user_system_runs_in_its_place_and_can_change_the_outcome() {
     // One sphere candidate from `cull`; the cubes are 0.0975 m apart, so `prune` dropped it.
     assert_eq!(sim.ctx.stats.candidates, 1);
     assert_eq!(CENSUS.load(std::sync::atomic::Ordering::SeqCst), 1000, "census ran once, after prune");
-    // Freezing after integration stops the cubes: no impulse ever happens.
+    // Freezing at the start of every step stops the cubes: no impulse ever happens.
     let mut sim = sim_of("face-collision.ron", |_| {});
     sim.schedule.insert_before("cull", System { name: "freeze", run: freeze }).expect("cull exists");
     sim.run(30).expect("finite");

@@ -1,6 +1,6 @@
 //! Snapshots: `--save` then `--resume` continues a run bit for bit (100 + 100 steps equal 200,
-//! also under gravity, with resting contacts and sleeping),
-//! and `--out` carries a `state_hash` that makes that cheap to check.
+//! also under gravity, with resting contacts and sleeping), and `--out` carries a `state_hash`
+//! that makes that cheap to check.
 
 use std::process::{Command, Output};
 

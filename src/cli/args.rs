@@ -1,11 +1,17 @@
-//! Command-line interface types (CONTRACTS.md §3).
+//! Command-line interface types (docs/cli.md).
 
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
 /// rigid: a rigid-body dynamics sandbox after "Rigid Body Dynamics Simulator Sandbox".
 #[derive(Debug, Parser)]
-#[command(name = "rigid", version, about)]
+#[command(
+    name = "rigid",
+    version,
+    about,
+    after_help = "With no subcommand, `rigid` runs the built-in demo scene (the same as `rigid run`).\n\
+                  Scene format, commands and output files: docs/scenes.md and docs/cli.md."
+)]
 pub struct Cli {
     /// What to do (default: `run` on the built-in demo scene).
     #[command(subcommand)]
@@ -22,9 +28,9 @@ pub enum Command {
         /// Scene file (RON).
         scene: PathBuf,
     },
-    /// Print the default schedule, one system a line, in run order.
+    /// List every shipped system, the default schedule's in run order (marked), then the others.
     Systems,
-    /// Benchmark a built-in scene (BENCHMARKS.md).
+    /// Benchmark a built-in scene (docs/benchmarks.md).
     Bench(BenchArgs),
     /// Simulate a scene and draw PNG frames (and optionally an animated GIF), no GPU needed.
     Render(RenderArgs),
@@ -44,8 +50,14 @@ pub struct SceneArgs {
     #[arg(long, value_parser = parse_positive)]
     pub dt: Option<f64>,
     /// Sample every K-th step (step 0 and the last step are always included).
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, default_value_t = 5, value_parser = parse_every)]
     pub every: u64,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Worker threads (default: the number of cores); results are identical for any count.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
 }
 
 /// `rigid render`.
@@ -54,8 +66,9 @@ pub struct RenderArgs {
     /// Scene, steps and sampling.
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Directory for the frames `frame-00000.png`, ... (created if missing).
-    #[arg(long, value_name = "DIR")]
+    /// Directory for the frames `frame-00000.png`, ... (created if missing; frames of an
+    /// earlier render in it are removed first, and said so).
+    #[arg(short, long, value_name = "DIR")]
     pub out: PathBuf,
     /// Image size.
     #[arg(long, default_value = "640x480", value_parser = parse_size)]
@@ -69,7 +82,7 @@ pub struct RenderArgs {
     /// Point the camera looks at, `x,y,z` [m].
     #[arg(long, value_parser = parse_vector, allow_hyphen_values = true)]
     pub target: Option<[f64; 3]>,
-    /// Draw each frame's contact points (yellow) and normals (red).
+    /// Draw the contact points (yellow) and normals (red) of the steps since the last frame.
     #[arg(long)]
     pub contacts: bool,
     /// Fill fixed actors (default: outlines, so closed boxes do not hide their contents).
@@ -101,16 +114,16 @@ pub struct RunArgs {
     #[arg(long, value_parser = parse_positive)]
     pub dt: Option<f64>,
     /// Write the final state as JSON to FILE.
-    #[arg(long, value_name = "FILE")]
+    #[arg(short, long, value_name = "FILE")]
     pub out: Option<PathBuf>,
     /// Write the trajectory as CSV to FILE.
     #[arg(long, value_name = "FILE")]
     pub trajectory: Option<PathBuf>,
     /// Record every K-th step in the trajectory.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, default_value_t = 1, value_parser = parse_every)]
     pub every: u64,
     /// No progress bar and no summary.
-    #[arg(long)]
+    #[arg(short, long)]
     pub quiet: bool,
     /// Worker threads (default: the number of cores); results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
@@ -148,7 +161,7 @@ impl Default for RunArgs {
 /// `rigid bench`.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Scene: `box-gas`, `pyramid` or `rain` (BENCHMARKS.md).
+    /// Scene: `box-gas`, `pyramid` or `rain` (docs/benchmarks.md).
     #[arg(value_parser = ["box-gas", "pyramid", "rain"])]
     pub scene: String,
     /// Cube counts, comma-separated (box-gas, rain).
@@ -173,7 +186,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub json: bool,
     /// Let still bodies sleep (off by default, so the contact solver is measured on every
-    /// body; BENCHMARKS.md).
+    /// body; docs/benchmarks.md).
     #[arg(long)]
     pub sleep: bool,
     /// Also write the results as CSV to FILE.
@@ -192,6 +205,14 @@ fn parse_steps(s: &str) -> Result<u64, String> {
         return Err(format!("{n} steps is more than the limit of {MAX_STEPS}"));
     }
     Ok(n)
+}
+
+fn parse_every(s: &str) -> Result<u64, String> {
+    match s.parse::<u64>() {
+        Ok(0) => Err("must be at least 1 (every step), got 0".to_string()),
+        Ok(k) => Ok(k),
+        Err(_) => Err(format!("'{s}' is not a whole number of steps (1 or more)")),
+    }
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {

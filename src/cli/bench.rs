@@ -1,7 +1,7 @@
-//! The `rigid bench` driver (BENCHMARKS.md): builds a benchmark scene, warms up, times the
+//! The `rigid bench` driver (docs/benchmarks.md): builds a benchmark scene, warms up, times the
 //! schedule's steps, and reports per size as a table row or a JSON line.
 
-use super::{AppError, write_error, write_out};
+use super::{AppError, check_writable, outln, write_error, write_out};
 use crate::cli::args::BenchArgs;
 use crate::math::Vector;
 use crate::scene::benchmarks::{BenchScene, rain_half_width, scene_sim};
@@ -147,6 +147,11 @@ pub fn peak_rss_mib() -> f64 {
 
 /// `rigid bench`: runs each size and prints a table or JSON lines, and the CSV and plot asked for.
 pub(super) fn bench(args: &BenchArgs) -> Result<(), AppError> {
+    for (file, flag) in [(&args.csv, "--csv"), (&args.plot, "--plot")] {
+        if let Some(file) = file {
+            check_writable(file, flag)?;
+        }
+    }
     use crate::scene::benchmarks::BenchScene;
     let threads = rayon::current_num_threads();
     let (scene, mut sizes) = match args.scene.as_str() {
@@ -164,15 +169,22 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), AppError> {
     let warmup = args.warmup.unwrap_or(if gas { 20 } else { 0 });
     let mut rows = Vec::new();
     if !args.json {
-        println!(
+        outln!(
             "{:>8} {:>8} {:>12} {:>12} {:>14} {:>14} {:>12} {:>10}",
-            "actors", "threads", "mean ms", "median ms", "ke start", "ke end", "check", "rss MiB"
+            "actors",
+            "threads",
+            "mean ms",
+            "median ms",
+            "ke start",
+            "ke end",
+            "check",
+            "rss MiB"
         );
     }
     for size in sizes {
         let r = crate::cli::bench::run(scene, size, steps, warmup, args.seed, threads, args.sleep)?;
         if args.json {
-            println!("{}", serde_json::to_string(&r).expect("plain data serialises"));
+            outln!("{}", serde_json::to_string(&r).expect("plain data serialises"));
         } else {
             let check = match (r.escaped, r.max_displacement_m, r.outside) {
                 (Some(e), _, _) => format!("{e} escaped"),
@@ -180,7 +192,7 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), AppError> {
                 (_, _, Some(o)) => format!("{o} outside"),
                 _ => String::new(),
             };
-            println!(
+            outln!(
                 "{:>8} {:>8} {:>12.3} {:>12.3} {:>14.4} {:>14.4} {:>12} {:>10.1}",
                 r.actors,
                 r.threads,
@@ -192,7 +204,7 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), AppError> {
                 r.peak_rss_mib
             );
             let parts: Vec<String> = r.systems_ms.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
-            println!("         ms/step by system: {}", parts.join(", "));
+            outln!("         ms/step by system: {}", parts.join(", "));
         }
         rows.push(r);
     }

@@ -1,22 +1,22 @@
 //! `rigid check`: loads and builds a scene without running it, and prints what it holds.
 
-use super::{AppError, load_scene, print_warnings};
+use super::{AppError, load_scene, outln, print_warnings};
 use std::path::Path;
 
 pub(super) fn check(path: &Path) -> Result<(), AppError> {
     let (def, path) = load_scene(Some(path))?;
     let mut sim = crate::scene::build(&def, &path)?;
     print_warnings(&mut sim, &path);
-    println!("{}: ok", path.display());
-    println!("dt {} s, {} steps, gravity {:?}", def.dt, def.steps, def.gravity);
-    println!("schedule: {}", sim.schedule.names().join(", "));
-    println!("{} actors, {} distinct meshes", sim.len(), sim.ctx.meshes.len());
+    outln!("{}: ok", path.display());
+    outln!("dt {} s, {} steps, gravity {:?}", def.dt, def.steps, def.gravity);
+    outln!("schedule: {}", sim.schedule.names().join(", "));
+    outln!("{} actors, {} distinct meshes", sim.len(), sim.ctx.meshes.len());
     for a in sim.actors().iter().take(20) {
         let fixed = if a.mass.is_fixed() { " (fixed)" } else { "" };
-        println!("  {}: mass {} kg at {}{fixed}", a.name, a.mass.mass, a.pose.position);
+        outln!("  {}: mass {} kg at {}{fixed}", a.name, a.mass.mass, a.pose.position);
     }
     if sim.len() > 20 {
-        println!("  ... and {} more", sim.len() - 20);
+        outln!("  ... and {} more", sim.len() - 20);
     }
     Ok(())
 }

@@ -1,5 +1,5 @@
 //! What each `rigid` subcommand does, as library functions so tests can call them; `main`
-//! only parses arguments, prints errors and maps them to exit codes (CONTRACTS.md §3).
+//! only parses arguments, prints errors and maps them to exit codes (docs/cli.md).
 
 pub mod args;
 pub mod bench;
@@ -8,12 +8,14 @@ mod export;
 mod plot;
 mod render;
 mod run;
+mod systems;
 
 use crate::cli::args::{Command, SceneArgs};
 use crate::error::{SceneError, SnapshotError, StepError};
 use crate::io::output::write_atomic;
 use crate::scene::{self, SceneDef};
 use crate::sim::Sim;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 /// The scene `rigid run` uses when given none (also `scenes/demo.ron`).
@@ -46,6 +48,10 @@ pub enum AppError {
         /// Steps completed.
         step: u64,
     },
+    /// Standard output was closed (`rigid check big.ron | head -1`): the program ends quietly
+    /// with exit code 0, as a reader that has seen enough is no failure.
+    #[error("standard output closed")]
+    OutputClosed,
     /// A command line the argument parser cannot judge alone (exit 2).
     #[error("{0}")]
     Usage(String),
@@ -60,14 +66,33 @@ pub enum AppError {
 }
 
 impl AppError {
-    /// CONTRACTS.md §3: 2 for bad input, 1 for any other failure.
+    /// docs/cli.md: 2 for bad input, 1 for any other failure.
     #[must_use]
     pub fn exit_code(&self) -> i32 {
         match self {
             Self::Scene(_) | Self::Snapshot(_) | Self::Usage(_) => 2,
             Self::Interrupted { .. } => 130,
+            Self::OutputClosed => 0,
             _ => 1,
         }
+    }
+}
+
+/// Prints a line to standard output; a closed output (a pipe whose reader stopped) becomes
+/// `AppError::OutputClosed` instead of the panic `println!` would raise.
+macro_rules! outln {
+    ($($arg:tt)*) => { $crate::cli::print_line(format_args!($($arg)*))? };
+}
+pub(crate) use outln;
+
+/// `outln!`'s writer.
+pub(crate) fn print_line(args: std::fmt::Arguments) -> Result<(), AppError> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_fmt(args).and_then(|()| out.write_all(b"\n")) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(AppError::OutputClosed),
+        Err(e) => Err(AppError::Write { path: PathBuf::from("<standard output>"), source: e }),
+        Ok(()) => Ok(()),
     }
 }
 
@@ -79,18 +104,13 @@ pub fn execute(command: Command) -> Result<(), AppError> {
             in_pool(threads, || run::run(&args))
         }
         Command::Check { scene } => check::check(&scene),
-        Command::Systems => {
-            for name in crate::systems::default_schedule().names() {
-                println!("{name}");
-            }
-            Ok(())
-        }
+        Command::Systems => systems::list(),
         Command::Bench(args) => {
             let threads = args.threads;
             in_pool(threads, || bench::bench(&args))
         }
-        Command::Render(args) => in_pool(None, || render::render(&args)),
-        Command::Export(args) => in_pool(None, || export::export(&args)),
+        Command::Render(args) => in_pool(args.scene.threads, || render::render(&args)),
+        Command::Export(args) => in_pool(args.scene.threads, || export::export(&args)),
     }
 }
 
@@ -136,6 +156,36 @@ pub(crate) fn write_error(path: &Path, source: std::io::Error) -> AppError {
 
 pub(crate) fn write_out(path: &Path, bytes: impl AsRef<[u8]>) -> Result<(), AppError> {
     write_atomic(path, bytes.as_ref()).map_err(|e| write_error(path, e))
+}
+
+/// A progress bar over `steps` steps, or none when `quiet` or stderr is not a terminal.
+pub(crate) fn progress_bar(steps: u64, quiet: bool) -> Option<indicatif::ProgressBar> {
+    if quiet || !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = indicatif::ProgressBar::new(steps);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {per_sec}  eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    Some(bar)
+}
+
+/// Checks, before any simulating, that `path` can be written: its folder exists and is a
+/// folder, and `path` itself is not a folder. A run must not compute for minutes and then fail.
+pub(crate) fn check_writable(path: &Path, flag: &str) -> Result<(), AppError> {
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let problem = if !parent.is_dir() {
+        Some(format!("folder {} does not exist", parent.display()))
+    } else if path.is_dir() {
+        Some("is a folder; give a file name".to_string())
+    } else {
+        None
+    };
+    match problem {
+        Some(p) => Err(AppError::Usage(format!("{flag} {}: cannot write: {p}", path.display()))),
+        None => Ok(()),
+    }
 }
 
 /// Loads and builds the scene of `render`/`export`; returns it with the number of steps.

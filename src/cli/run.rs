@@ -1,14 +1,14 @@
 //! `rigid run`: steps a scene (or resumes a snapshot), streams the trajectory, writes the
 //! final state and snapshot, and prints a summary; Ctrl-C stops at a step boundary.
 
-use super::{AppError, load_scene_text, print_warnings, write_error, write_out};
+use super::{AppError, check_writable, load_scene_text, outln, print_warnings, progress_bar, write_error, write_out};
 use crate::cli::args::RunArgs;
 use crate::error::SnapshotError;
 use crate::io::output::{TRAJECTORY_HEADER, state_json, trajectory_rows};
 use crate::io::snapshot::Snapshot;
 use crate::scene;
 use crate::sim::{ActorState, Sim};
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -34,6 +34,8 @@ fn prepare(args: &RunArgs) -> Result<(Sim, PathBuf, String, u64), AppError> {
         def.dt = dt;
     }
     if let Some(names) = &args.schedule {
+        // Checked here, so a typo is blamed on the flag, not on the scene file.
+        crate::systems::schedule_of(names).map_err(|e| AppError::Usage(format!("--schedule: {e}")))?;
         def.schedule = Some(names.clone());
     }
     let steps = args.steps.unwrap_or(def.steps);
@@ -55,6 +57,11 @@ fn read_snapshot(file: &Path) -> Result<Snapshot, SnapshotError> {
 }
 
 pub(super) fn run(args: &RunArgs) -> Result<(), AppError> {
+    for (file, flag) in [(&args.out, "--out"), (&args.trajectory, "--trajectory"), (&args.save, "--save")] {
+        if let Some(file) = file {
+            check_writable(file, flag)?;
+        }
+    }
     let (mut sim, path, text, steps) = prepare(args)?;
     if args.resume.is_none() {
         print_warnings(&mut sim, &path);
@@ -69,13 +76,12 @@ pub(super) fn run(args: &RunArgs) -> Result<(), AppError> {
         ),
         None => Ok(()),
     };
-    let show = !args.quiet && std::io::stderr().is_terminal();
     let before = sim.totals();
     let mut trajectory = match &args.trajectory {
         Some(p) => Some((p, trajectory_start(p, &sim)?)),
         None => None,
     };
-    let bar = show.then(|| progress_bar(steps));
+    let bar = progress_bar(steps, args.quiet);
     let start = Instant::now();
     let mut last_good: Option<Vec<ActorState>> = None;
     for _ in 0..steps {
@@ -119,7 +125,7 @@ pub(super) fn run(args: &RunArgs) -> Result<(), AppError> {
     }
     save(&sim)?;
     if !args.quiet {
-        print_summary(&sim, &before, wall);
+        print_summary(&sim, &before, wall)?;
     }
     Ok(())
 }
@@ -145,26 +151,35 @@ fn trajectory_start(path: &Path, sim: &Sim) -> Result<std::io::BufWriter<std::fs
     Ok(buf)
 }
 
-fn progress_bar(steps: u64) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(steps);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {per_sec}  eta {eta}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar
-}
-
-fn print_summary(sim: &Sim, before: &crate::sim::Totals, wall: std::time::Duration) {
+fn print_summary(sim: &Sim, before: &crate::sim::Totals, wall: std::time::Duration) -> Result<(), AppError> {
     let after = sim.totals();
     let secs = wall.as_secs_f64();
     let rate = if secs > 0.0 { sim.steps as f64 / secs } else { f64::INFINITY };
-    println!("simulated {:.4} s in {} steps of {} s, {} actors", sim.time, sim.steps, sim.ctx.dt, sim.len());
-    println!("wall time {secs:.3} s ({rate:.0} steps/s)");
-    let [f, v, e] = sim.impulses;
-    println!("impulses: face {f}, vertex {v}, edge {e}");
-    println!("momentum drift |Δp| = {:.3e} kg·m/s", (after.linear_momentum - before.linear_momentum).length());
+    outln!("simulated {:.4} s in {} steps of {} s, {} actors", sim.time, sim.steps, sim.ctx.dt, sim.len());
+    outln!("wall time {secs:.3} s ({rate:.0} steps/s)");
+    let by_test = |c: [u64; 3]| format!("face {}, vertex {}, edge {}", c[0], c[1], c[2]);
+    outln!("contacts found: {} (by the detection test that found each)", by_test(sim.found));
+    outln!("impulses: {} (by the test that found the contact)", by_test(sim.impulses));
+    outln!("contact solver: {} pair-steps held (resting and sliding contact, friction)", sim.held);
     let ke0 = before.kinetic_energy;
-    let rel =
-        if ke0 > 0.0 { format!(" ({:+.3e} relative)", (after.kinetic_energy - ke0) / ke0) } else { String::new() };
-    println!("kinetic energy {ke0} J -> {} J{rel}", after.kinetic_energy);
+    let change =
+        if ke0 > 0.0 { format!(" ({:+.1} %)", 100.0 * (after.kinetic_energy - ke0) / ke0) } else { String::new() };
+    outln!("kinetic energy {} J -> {} J{change}", significant(ke0), significant(after.kinetic_energy));
+    // Momentum is kept only without outside forces: no gravity and nothing fixed to push on.
+    let fixed = sim.actors().iter().any(|a| a.mass.is_fixed());
+    if sim.ctx.params.gravity == crate::math::Vector::ZERO && !fixed {
+        let drift = (after.linear_momentum - before.linear_momentum).length();
+        outln!("momentum drift |Δp| = {} kg·m/s (kept: no gravity, nothing fixed)", significant(drift));
+    }
+    Ok(())
+}
+
+/// Six significant digits, in scientific notation outside 1e-3..1e6 (and plain 0).
+fn significant(x: f64) -> String {
+    if x == 0.0 || ((1e-3..1e6).contains(&x.abs())) {
+        let s = format!("{x:.6}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{x:.5e}")
+    }
 }

@@ -1,12 +1,12 @@
-//! Contacts and candidate pairs. Convention (PHYSICS.md §0): the normal points **from B to A**,
-//! where A is the pair's lower actor index, so a positive impulse pushes A along `normal`.
+//! Contacts and candidate pairs. Convention (docs/physics.md §0): the normal points **from B to
+//! A**, where A is the pair's lower actor index, so a positive impulse pushes A along `normal`.
 
 use crate::math::{Scalar, Vector};
 
 /// Which of the paper's three detection tests found a contact.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Feature {
-    /// Triangle centroids of one body inside the other (PHYSICS.md §1.3).
+    /// Triangle centroids of one body inside the other (docs/physics.md §1.3).
     Face,
     /// Vertices of one body inside the other (§1.4).
     Vertex,
@@ -36,7 +36,7 @@ pub struct Contact {
     pub point: Vector,
     /// Unit normal from B to A.
     pub normal: Vector,
-    /// Penetration depth along `normal`, ≥ 0 [m] (PHYSICS.md §2.6).
+    /// Penetration depth along `normal`, ≥ 0 [m] (docs/physics.md §2.6).
     pub depth: Scalar,
     /// The test that found it.
     pub feature: Feature,
@@ -44,7 +44,7 @@ pub struct Contact {
 
 impl Contact {
     /// The same contact seen from the other body: a test run as (B, A) reports a normal from A
-    /// to B, so it is negated to keep the pair's convention (PHYSICS.md §1.6).
+    /// to B, so it is negated to keep the pair's convention (docs/physics.md §1.6).
     #[must_use]
     pub fn flipped(self) -> Self {
         Self { normal: -self.normal, ..self }

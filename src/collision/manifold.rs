@@ -42,30 +42,25 @@ pub struct ClipScratch {
     points: Vec<(Vector, Scalar)>,
 }
 
-/// The contact points of a pair held along `axis` (from `contact_axis`), by clipping, as
-/// Box2D, Bullet and rapier do: the *reference* face is the face whose normal the axis is; the
-/// *incident* face is the other body's face most opposed to it. The incident face's outline is
-/// clipped to the prism over the reference face (its side planes), and each clipped corner
-/// within `reach` [m] of the reference plane is a point, placed halfway between the corner and
-/// the plane, with its signed distance to the plane as its gap (≤ 0 penetrating, > 0 a
-/// speculative point that may close within the step). Reduced to at most four spanning the
-/// patch: the deepest, the farthest from it, the one making the largest triangle, and the one
-/// adding most area.
+/// The contact points of a pair held along `axis` (from `contact_axis`), by clipping as
+/// Box2D, Bullet and rapier do: the other body's face most opposed to the *reference* face (the
+/// one whose normal the axis is) is clipped to the prism over the reference face. Each clipped
+/// corner within `reach` [m] of the reference plane is a point, halfway between corner and
+/// plane, with its signed distance as its gap; at most four spanning the patch are kept.
 ///
-/// Corners the step may bring into contact are points even while apart, so a tumbling cube
-/// landing on another is stopped over its whole face, not pivoted about the one corner that
-/// touched first. Empty for an edge–edge axis or when nothing survives the clipping: the
-/// caller then holds the pair at one point (`support_point`). `scratch` is reused.
+/// Corners the step may bring into contact count while apart, so a tumbling cube landing on
+/// another is stopped over its whole face, not pivoted about the corner that touched first.
+/// Empty for an edge–edge axis or when nothing survives the clipping: the caller then holds the
+/// pair at `support_point`.
 #[must_use]
 pub fn manifold(a: &Posed, b: &Posed, axis: &Axis, reach: Scalar, scratch: &mut ClipScratch) -> Manifold {
     let (reference, incident, face) = match axis.reference {
         Reference::FaceOfB(f) => (b, a, f as usize),
         Reference::FaceOfA(f) => (a, b, f as usize),
         Reference::Edges => {
-            // An edge axis nearly along a face normal is a face resting on an edge: a cube lying
-            // over the edge of a long wall, whose far corners make the wall's own face axis
-            // read deeper than the edge. Clipped against that face it gets a point at each end
-            // of the edge, where one point would let it seesaw.
+            // An edge axis nearly along a face normal is a face resting on an edge (a cube over
+            // a wall's edge, whose far corners make the wall's face axis read deeper): clipped
+            // against that face it gets a point at each end of the edge, not one to seesaw on.
             let best = |p: &Posed, n: Vector| {
                 (0..p.planes.len()).map(|f| (p.planes[f].normal.dot(n), f)).max_by(|x, y| x.0.total_cmp(&y.0))
             };
@@ -159,14 +154,11 @@ fn reduce(points: &[(Vector, Scalar)], same: Scalar) -> Manifold {
     m
 }
 
-/// The axis along which two convex bodies overlap least, or are farthest apart: the
-/// separating-axis test over the face normals of both and the cross products of their edge
-/// directions, as resting contact needs it. The paper's detection tests decide *whether* a
-/// pair touches; their normal is that of the first test that fires (a face centroid, a vertex,
-/// an edge), which in a pile of tumbled boxes can point along a side face one step and the top
-/// face the next, and their depth can be a whole body deep. Holding a resting pair along its
-/// least-overlap axis, by the amount of that overlap, keeps the pushes small and the normals
-/// steady.
+/// The axis along which two convex bodies overlap least, or are farthest apart, over the face
+/// normals of both and the cross products of their edge directions (separating-axis test). The
+/// paper's tests decide *whether* a pair touches, but their normal can jump between faces from
+/// step to step and their depth be a body deep; resting contact held along this axis, by this
+/// overlap, gets small pushes and steady normals.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Axis {
     /// Unit normal from B to A.

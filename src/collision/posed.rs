@@ -1,5 +1,5 @@
 //! Kernels the detection tests share: posed meshes, point-in-mesh, closest face, segment
-//! clipping and penetration depth (PHYSICS.md §1.1, §1.5, §2.6).
+//! clipping and penetration depth (docs/physics.md §1.1, §1.5, §2.6).
 
 use crate::math::{Scalar, Vector};
 use crate::model::components::Pose;
@@ -7,7 +7,7 @@ use crate::model::mesh::{ConvexMesh, Plane};
 use std::sync::Arc;
 
 /// Inside tolerance relative to the body's radius: points this far outside a face still count
-/// as inside, so bodies placed exactly touching are seen (PHYSICS.md §1.1, test (g)); the
+/// as inside, so bodies placed exactly touching are seen (docs/physics.md §1.1, test (g)); the
 /// approach test of §2.5 keeps touching-but-separating bodies from getting impulses.
 pub const INSIDE_TOLERANCE: Scalar = 1e-9;
 
@@ -84,12 +84,10 @@ impl Posed {
     }
 
     /// The outward normal of the face of this body (B) closest to inside point `p`, for a
-    /// contact with `other` (A): PHYSICS.md §1.1's closest face, with near ties (within
-    /// `FACE_TIE_TOLERANCE`) going to the face along which the two bodies overlap least
-    /// (§2.6's depth), then to the one facing A. PHYSICS.md breaks exact ties by velocity; for
-    /// two boxes side by side whose shared corner dips a hair below one's bottom face, the
-    /// bottom is "closest" to the corner yet the bodies overlap a whole height along it, and
-    /// the side is the true contact normal.
+    /// contact with `other` (A): docs/physics.md §1.1's closest face, with near ties (within
+    /// `FACE_TIE_TOLERANCE`) going to the face along which the bodies overlap least (§2.6's
+    /// depth), then to the one facing A (§6.5): a corner of a box beside another may dip a hair
+    /// below its bottom face, yet the side is the contact normal.
     #[must_use]
     pub fn closest_face_normal(&self, p: Vector, other: &Self) -> Vector {
         let best = self.max_plane_distance(p);
@@ -106,14 +104,14 @@ impl Posed {
     }
 
     /// Largest signed distance of `p` to a face plane: `p` is inside iff it is ≤ the inside
-    /// tolerance, and minus it is the depth below the closest face (PHYSICS.md §1.1).
+    /// tolerance, and minus it is the depth below the closest face (docs/physics.md §1.1).
     #[must_use]
     pub fn max_plane_distance(&self, p: Vector) -> Scalar {
         self.planes.iter().map(|pl| pl.normal.dot(p) - pl.offset).fold(Scalar::NEG_INFINITY, Scalar::max)
     }
 }
 
-/// Point-in-mesh for convex `b` (PHYSICS.md §1.1, erratum E2): inside iff
+/// Point-in-mesh for convex `b` (docs/physics.md §1.1, erratum E2): inside iff
 /// `max_f (p − a_f)·n_f ≤ ε`. The paper dots `p` itself with `n_f`, which can never report a
 /// point inside a closed mesh.
 ///
@@ -130,7 +128,7 @@ pub fn is_inside(b: &Posed, p: Vector) -> bool {
     b.planes.iter().all(|pl| pl.normal.dot(p) - pl.offset <= eps)
 }
 
-/// Where a segment meets a convex body (PHYSICS.md §1.5, Cyrus–Beck form).
+/// Where a segment meets a convex body (docs/physics.md §1.5, Cyrus–Beck form).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Clip {
     /// Segment parameter where it enters [0, 1].
@@ -182,7 +180,7 @@ pub fn clip_segment(b: &Posed, v0: Vector, v1: Vector, eps: Scalar) -> Option<Cl
     Some(clip)
 }
 
-/// Overlap of the two bodies' projections on `n` (from B to A), PHYSICS.md §2.6:
+/// Overlap of the two bodies' projections on `n` (from B to A), docs/physics.md §2.6:
 /// `max_b b·n − min_a a·n`, clamped at 0. Moving A by this along `n` separates them.
 #[must_use]
 pub fn depth_along(a: &Posed, b: &Posed, n: Vector) -> Scalar {
@@ -203,7 +201,7 @@ mod tests {
 
     #[test]
     fn point_in_mesh_matches_t_pim() {
-        // PHYSICS.md §4 T-PIM: centre inside, (0.6,0,0) outside, (0.5,0,0) on the face inside.
+        // docs/physics.md §4 T-PIM: centre inside, (0.6,0,0) outside, (0.5,0,0) on the face inside.
         let cube = cube_at(Vector::ZERO, Vector::ZERO);
         assert!(is_inside(&cube, Vector::ZERO));
         assert!(!is_inside(&cube, Vector::new(0.6, 0.0, 0.0)));

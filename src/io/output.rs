@@ -1,4 +1,4 @@
-//! Output files: the final-state JSON and the trajectory CSV (CONTRACTS.md §4–5). Floats are
+//! Output files: the final-state JSON and the trajectory CSV (docs/cli.md). Floats are
 //! printed so they round-trip an f64; files are written atomically (temp file + rename), so a
 //! failed run never leaves a half-written file.
 
@@ -36,7 +36,7 @@ struct StateJson<'a> {
     state_hash: String,
 }
 
-/// The final-state document of CONTRACTS.md §4 (plus `state_hash`, see `state_hash`).
+/// The final-state document of docs/cli.md (plus `state_hash`, see `state_hash`).
 #[must_use]
 pub fn state_json(sim: &Sim, actors: &[ActorState]) -> String {
     let t = totals(actors);

@@ -47,7 +47,7 @@ pub struct Velocity {
 }
 
 /// Mass and inertia about the centre of mass, body frame, with inverses. A fixed actor keeps
-/// its nominal `mass` and `inertia` for output but has zero inverses (PHYSICS.md §0).
+/// its nominal `mass` and `inertia` for output but has zero inverses (docs/physics.md §0).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MassProps {
     /// Mass [kg].
@@ -58,7 +58,7 @@ pub struct MassProps {
     pub inertia: Mat3,
     /// Its inverse, zero when fixed [1/(kg·m²)].
     pub inv_inertia: Mat3,
-    /// Principal moments [kg·m²] (PHYSICS.md §3.4), in the order of `principal_axes`' columns.
+    /// Principal moments [kg·m²] (docs/physics.md §3.4), in the order of `principal_axes`' columns.
     pub principal_moments: Vector,
     /// Rotation P from the principal frame to the body frame: `inertia = P diag(moments) Pᵀ`.
     pub principal_axes: Quat,
@@ -86,7 +86,7 @@ impl MassProps {
     }
 }
 
-/// Surface properties; a pair uses the mean of its two actors (CONTRACTS.md §2).
+/// Surface properties; a pair uses the mean of its two actors (docs/scenes.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     /// Coefficient of restitution, 0..=1.
@@ -95,7 +95,7 @@ pub struct Material {
     pub friction: Scalar,
 }
 
-/// Bounding-sphere radius about the centre of mass [m] (PHYSICS.md §1.2, erratum E1).
+/// Bounding-sphere radius about the centre of mass [m] (docs/physics.md §1.2, erratum E1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BoundingSphere {
     /// `max |p_body|` over the mesh's vertices [m].

@@ -1,4 +1,4 @@
-//! Exact volume, centre of mass and inertia of a closed triangle mesh (PHYSICS.md §3).
+//! Exact volume, centre of mass and inertia of a closed triangle mesh (docs/physics.md §3).
 //!
 //! The paper puts the mass at the vertices and the centre of mass at their average (errata E7,
 //! E8): both depend on the tessellation and are wrong for a solid. Here every outward triangle
@@ -17,7 +17,7 @@ pub struct VolumeProps {
     pub inertia: Mat3,
 }
 
-/// Integrates a closed triangle mesh (PHYSICS.md §3.1, Mirtich/Eberly/Tonon).
+/// Integrates a closed triangle mesh (docs/physics.md §3.1, Mirtich/Eberly/Tonon).
 ///
 /// With `a, b, c` relative to the reference `o` (the vertex average, to limit cancellation):
 /// `D = a·(b×c)`, `V = ΣD/6`, `g = o + ΣD(a+b+c)/(4ΣD)`,
@@ -56,7 +56,7 @@ pub fn outer(a: Vector, b: Vector) -> Mat3 {
     Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
-/// Principal axes of a symmetric tensor (PHYSICS.md §3.4), by cyclic Jacobi rotations:
+/// Principal axes of a symmetric tensor (docs/physics.md §3.4), by cyclic Jacobi rotations:
 /// returns the moments and the rotation P (det +1) with `I = P diag(moments) Pᵀ`. Its columns
 /// are the principal axes in the body frame.
 #[must_use]
@@ -106,7 +106,7 @@ mod tests {
 
     #[test]
     fn corner_tetrahedron_has_the_exact_products_of_inertia() {
-        // PHYSICS.md §3.2: V = 1/6, g = 1/4, diagonal 1/80, off-diagonals +1/480 (ρ = 1).
+        // docs/physics.md §3.2: V = 1/6, g = 1/4, diagonal 1/80, off-diagonals +1/480 (ρ = 1).
         let v = [Vector::ZERO, Vector::X, Vector::Y, Vector::Z];
         let t = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         let p = volume_props(&v, &t);
@@ -124,7 +124,7 @@ mod tests {
         let mut v: Vec<Vector> =
             (0..8).map(|k| Vector::new((k >> 2 & 1) as f64, (k >> 1 & 1) as f64, (k & 1) as f64)).collect();
         v.push(Vector::new(0.5, 0.5, 1.0)); // 8: top (z = 1) centre
-        // Canonical cube triangles (PHYSICS.md §0) with the +z face replaced by a fan of four.
+        // Canonical cube triangles (docs/physics.md §0) with the +z face replaced by a fan of four.
         let t = [
             [4, 6, 7],
             [4, 7, 5],
@@ -149,7 +149,7 @@ mod tests {
 
     #[test]
     fn corner_tetrahedron_principal_moments_are_0_1_and_0_0625() {
-        // PHYSICS.md §3.2, m = 1 (ρ = 6): moments 0.1 about (1,1,1) and 0.0625 twice.
+        // docs/physics.md §3.2, m = 1 (ρ = 6): moments 0.1 about (1,1,1) and 0.0625 twice.
         let v = [Vector::ZERO, Vector::X, Vector::Y, Vector::Z];
         let p = volume_props(&v, &[[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]);
         let (moments, axes) = principal_axes(p.inertia * 6.0);

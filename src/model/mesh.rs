@@ -1,7 +1,7 @@
 //! Convex meshes: validated once when built, then shared read-only by every actor using them.
 //!
 //! A `ConvexMesh` stores its vertices in the body frame **about its exact centre of mass**
-//! (PHYSICS.md §0, §3), outward (counter-clockwise) triangles, deduplicated edges for the edge
+//! (docs/physics.md §0, §3), outward (counter-clockwise) triangles, deduplicated edges for the edge
 //! test, and the distinct face planes that point-in-mesh and clipping need (coplanar triangles,
 //! such as a box face's two halves, share one plane: same answers, half the work).
 
@@ -39,7 +39,7 @@ pub struct ConvexMesh {
     pub vertices: Vec<Vector>,
     /// Triangles, counter-clockwise seen from outside.
     pub triangles: Vec<[u32; 3]>,
-    /// Each undirected edge once, `(i, j)` with `i < j`, in sorted order (PHYSICS.md §1.5).
+    /// Each undirected edge once, `(i, j)` with `i < j`, in sorted order (docs/physics.md §1.5).
     pub edges: Vec<[u32; 2]>,
     /// Distinct face planes, in order of first triangle.
     pub planes: Vec<Plane>,
@@ -55,7 +55,7 @@ pub struct ConvexMesh {
     /// The feature edges themselves, `(i, j)` with `i < j`, sorted: the outline a renderer draws
     /// (a box has 12).
     pub feature_edges: Vec<[u32; 2]>,
-    /// Bounding-sphere radius about the centre of mass, `max |p|` [m] (PHYSICS.md §1.2).
+    /// Bounding-sphere radius about the centre of mass, `max |p|` [m] (docs/physics.md §1.2).
     pub radius: Scalar,
     /// Smallest width over the face normals [m]: the thickness that bounds safe speeds (§5).
     pub thickness: Scalar,
@@ -69,7 +69,7 @@ pub struct ConvexMesh {
 }
 
 impl ConvexMesh {
-    /// Validates and builds a mesh from raw vertices and triangles (PHYSICS.md §3.3): closed,
+    /// Validates and builds a mesh from raw vertices and triangles (docs/physics.md §3.3): closed,
     /// consistently wound (mixed windings repaired by a breadth-first walk, an inside-out mesh
     /// flipped), non-degenerate and convex. Returns the mesh and the centroid of the input
     /// coordinates, which the vertices were shifted by.
@@ -119,7 +119,7 @@ impl ConvexMesh {
         Ok((mesh, props.centroid))
     }
 
-    /// The canonical box of PHYSICS.md §0 with these full edge lengths [m].
+    /// The canonical box of docs/physics.md §0 with these full edge lengths [m].
     ///
     /// # Panics
     /// If a size is not positive and finite: callers pass checked or literal sizes.

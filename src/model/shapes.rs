@@ -1,4 +1,4 @@
-//! The built-in shapes of CONTRACTS.md §2 as raw vertex and triangle lists, each built exactly
+//! The built-in shapes of docs/scenes.md as raw vertex and triangle lists, each built exactly
 //! as the contract specifies so every implementation simulates the same solid. `ConvexMesh::new`
 //! validates and re-centres them.
 
@@ -9,13 +9,13 @@ use std::collections::HashMap;
 pub type RawMesh = (Vec<Vector>, Vec<[u32; 3]>);
 
 /// Most icosphere subdivisions accepted: n = 5 already has 20 480 triangles, and the narrow
-/// phase costs O(F_A·F_B) per pair (PHYSICS.md §1.7).
+/// phase costs O(F_A·F_B) per pair (docs/physics.md §1.7).
 pub const MAX_SUBDIVISIONS: u32 = 5;
 /// Fewest and most cylinder segments accepted: a prism needs 3; past 256 the mesh only gets
 /// slower, not rounder to any visible degree.
 pub const SEGMENTS_RANGE: std::ops::RangeInclusive<u32> = 3..=256;
 
-/// The canonical box of PHYSICS.md §0: vertex `k = 4ix + 2iy + iz`, 12 outward triangles.
+/// The canonical box of docs/physics.md §0: vertex `k = 4ix + 2iy + iz`, 12 outward triangles.
 #[must_use]
 pub fn box_raw(size: Vector) -> RawMesh {
     let h = size * 0.5;
@@ -172,7 +172,7 @@ mod tests {
 
     #[test]
     fn box_volume_and_inertia_are_exact() {
-        // PHYSICS.md §3.2: I = (m/12) diag(b²+c², a²+c², a²+b²), at ρ = 1 m = abc = 6.
+        // docs/physics.md §3.2: I = (m/12) diag(b²+c², a²+c², a²+b²), at ρ = 1 m = abc = 6.
         let m = build(box_raw(Vector::new(1.0, 2.0, 3.0)));
         assert!((m.volume - 6.0).abs() < 1e-14);
         let d = m.unit_inertia;

@@ -1,4 +1,4 @@
-//! The resting-contact benchmark scenes of BENCHMARKS.md, built exactly as the peer harness
+//! The resting-contact benchmark scenes of docs/benchmarks.md, built exactly as the peer harness
 //! builds them so both engines start from the same state: the `pyramid` of unit cubes on a
 //! ground slab, and the `rain` of cubes dropped into an open box.
 
@@ -162,7 +162,7 @@ impl BenchScene {
     }
 }
 
-/// The box-gas simulation of BENCHMARKS.md with `n` cubes (walls after the cubes), no gravity,
+/// The box-gas simulation of docs/benchmarks.md with `n` cubes (walls after the cubes), no gravity,
 /// dt = 1/60, the default schedule.
 #[must_use]
 pub fn box_gas_sim(n: u32, seed: u64) -> Sim {

@@ -1,5 +1,5 @@
 //! Building a `Sim` from a parsed scene: listed actors, then spawners in order; each shape's
-//! mesh built, validated and shared; masses from `mass` or `density` (PHYSICS.md §3).
+//! mesh built, validated and shared; masses from `mass` or `density` (docs/physics.md §3).
 
 use crate::error::SceneError;
 use crate::model::mesh::{ConvexMesh, MeshId};

@@ -4,7 +4,7 @@ use crate::math::{Scalar, Vector};
 use crate::model::shapes::RawMesh;
 use std::path::Path;
 
-/// Most vertices accepted from one OBJ: the narrow phase is O(F_A·F_B) per pair (PHYSICS.md
+/// Most vertices accepted from one OBJ: the narrow phase is O(F_A·F_B) per pair (docs/physics.md
 /// §1.7), so bigger models would stall every step; the bound also caps memory on bad input.
 pub const MAX_OBJ_VERTICES: usize = 100_000;
 

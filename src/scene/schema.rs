@@ -1,4 +1,4 @@
-//! Scene files (CONTRACTS.md §2): the RON schema, parsing with positions in errors, checks
+//! Scene files (docs/scenes.md): the RON schema, parsing with positions in errors, checks
 //! of every value, and building a `Sim`. Degrees become radians here, once.
 
 use crate::error::SceneError;
@@ -80,7 +80,7 @@ fn default_gravity() -> V3 {
     (0.0, -9.81, 0.0)
 }
 
-/// Settings of `resolve` and `correct` (PHYSICS.md §2.5–2.6); defaults in `Params`.
+/// Settings of `resolve` and `correct` (docs/physics.md §2.5–2.6); defaults in `Params`.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, rename = "Solver", default)]
 pub struct SolverDef {
@@ -117,7 +117,7 @@ impl Default for SolverDef {
     }
 }
 
-/// A shape (CONTRACTS.md §2); every one becomes a closed convex mesh.
+/// A shape (docs/scenes.md); every one becomes a closed convex mesh.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub enum ShapeDef {
@@ -277,7 +277,7 @@ pub struct ActorDef {
     pub fixed: bool,
 }
 
-/// Default restitution (CONTRACTS.md §2).
+/// Default restitution (docs/scenes.md).
 pub const DEFAULT_RESTITUTION: Scalar = 0.5;
 
 impl TryFrom<RawActor> for ActorDef {
@@ -335,7 +335,7 @@ fn positive(field: &str, v: Scalar, unit: &str) -> Result<Scalar, (String, Strin
     }
 }
 
-/// The RON options of every scene: bare optionals (`mass: 1.0`, CONTRACTS.md §2) and a
+/// The RON options of every scene: bare optionals (`mass: 1.0`, docs/scenes.md) and a
 /// nesting bound.
 #[must_use]
 pub fn ron_options() -> ron::Options {
@@ -382,9 +382,20 @@ pub fn read(path: &Path) -> Result<String, SceneError> {
 }
 
 fn parse_error(e: ron::error::SpannedError, text: &str, path: &Path) -> SceneError {
-    let (line, col) = (e.span.start.line.max(1), e.span.start.col.max(1));
-    let offset = offset_of(text, line, col);
+    let (mut line, mut col) = (e.span.start.line.max(1), e.span.start.col.max(1));
+    let mut offset = offset_of(text, line, col);
     let mut message = e.code.to_string();
+    // RON reports an unknown field after its name: point at the name itself.
+    if let ron::Error::NoSuchStructField { found, .. } = &e.code
+        && let Some(start) = text.get(..offset).and_then(|t| t.rfind(found.as_str()))
+    {
+        offset = start;
+        (line, col) = line_col(text, offset);
+    }
+    // An actor without a name is reported by its place in the list.
+    if let Some(rest) = message.strip_prefix("actor: ") {
+        message = format!("{}: {rest}", unnamed_actor(text, offset));
+    }
     // RON's type errors ("Expected float") do not say where; name the field being read.
     if let ron::Error::ExpectedFloat
     | ron::Error::ExpectedInteger
@@ -404,8 +415,28 @@ fn parse_error(e: ron::error::SpannedError, text: &str, path: &Path) -> SceneErr
         col,
         message,
         text: NamedSource::new(path.display().to_string(), text.to_string()),
-        at: offset.into(),
+        at: (offset, token_len(text, offset)).into(),
     }
+}
+
+/// The length of the word or number at `offset` (at least one character, unless at the end):
+/// the snippet underlines it instead of pointing between two characters.
+fn token_len(text: &str, offset: usize) -> usize {
+    let rest = text.get(offset..).unwrap_or("");
+    let word = rest.find(|c: char| !(c.is_alphanumeric() || "_.-+".contains(c))).unwrap_or(rest.len());
+    if word > 0 { word } else { rest.chars().next().map_or(0, char::len_utf8) }
+}
+
+/// How to name an actor without a `name` whose text ends at `offset`: its index in `actors`
+/// (the default name `actor-<index>` says the same), or the template of a spawner.
+fn unnamed_actor(text: &str, offset: usize) -> String {
+    let before = text.get(..offset).unwrap_or(text);
+    let list = before.rfind("actors").unwrap_or(0);
+    if before.rfind("spawners").is_some_and(|s| s > list) {
+        return "a spawner's actor (no name)".to_string();
+    }
+    let index = before[list..].matches("Actor(").count().saturating_sub(1);
+    format!("actor #{index} (no name; it would be 'actor-{index}')")
 }
 
 /// The `name` of the nearest `name:` before `offset`, if the text there is a field.

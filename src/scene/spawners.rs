@@ -1,5 +1,5 @@
-//! Spawners: a few lines of scene that expand into many actors (CONTRACTS.md §2), seeded
-//! through `rng.rs`, never from system entropy. The box-gas scene of BENCHMARKS.md exists once,
+//! Spawners: a few lines of scene that expand into many actors (docs/scenes.md), seeded
+//! through `rng.rs`, never from system entropy. The box-gas scene of docs/benchmarks.md exists once,
 //! here, and serves the `BoxGas` spawner, `rigid bench`, the benches and the tests.
 
 use crate::math::{Quat, Scalar, Vector, from_euler_degrees};
@@ -49,12 +49,12 @@ pub enum SpawnerDef {
         #[serde(default)]
         spin: Scalar,
     },
-    /// The pyramid benchmark scene of BENCHMARKS.md: `base` rows of unit cubes on a ground.
+    /// The pyramid benchmark scene of docs/benchmarks.md: `base` rows of unit cubes on a ground.
     Pyramid {
         /// Cubes in the bottom row.
         base: u32,
     },
-    /// The rain benchmark scene of BENCHMARKS.md: `actors` cubes dropped into an open box.
+    /// The rain benchmark scene of docs/benchmarks.md: `actors` cubes dropped into an open box.
     Rain {
         /// Number of cubes.
         actors: u32,
@@ -62,7 +62,7 @@ pub enum SpawnerDef {
         #[serde(default = "one")]
         seed: u64,
     },
-    /// The box-gas benchmark scene of BENCHMARKS.md: `actors` unit cubes in a closed box.
+    /// The box-gas benchmark scene of docs/benchmarks.md: `actors` unit cubes in a closed box.
     BoxGas {
         /// Number of cubes.
         actors: u32,
@@ -197,7 +197,7 @@ impl SpawnerDef {
     }
 }
 
-/// The random lattice of `Random` and box-gas (BENCHMARKS.md): cube i in cell
+/// The random lattice of `Random` and box-gas (docs/benchmarks.md): cube i in cell
 /// (i mod k, (i div k) mod k, i div k²), k = ⌈∛count⌉, twelve draws per cube in the order
 /// jitter (3), orientation (3), velocity (3), angular velocity (3).
 struct Lattice {
@@ -247,7 +247,7 @@ pub fn cube_side(n: u32) -> u32 {
     k
 }
 
-/// Uniform rotation from three uniforms (BENCHMARKS.md): q = (x, y, z, w) =
+/// Uniform rotation from three uniforms (docs/benchmarks.md): q = (x, y, z, w) =
 /// (√(1−u1) sin 2πu2, √(1−u1) cos 2πu2, √u1 sin 2πu3, √u1 cos 2πu3).
 #[must_use]
 pub fn uniform_rotation(u: Vector) -> Quat {
@@ -262,7 +262,7 @@ pub fn box_gas_half_extent(n: u32) -> Scalar {
     f64::from(cube_side(n)) + 0.5
 }
 
-/// The box-gas scene of BENCHMARKS.md: `n` unit cubes (mass 1, restitution 1, no friction)
+/// The box-gas scene of docs/benchmarks.md: `n` unit cubes (mass 1, restitution 1, no friction)
 /// on the seeded lattice, then six fixed walls 1 m thick closing the box.
 #[must_use]
 pub fn box_gas(n: u32, seed: u64) -> Vec<Instance> {

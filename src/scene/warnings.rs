@@ -1,5 +1,5 @@
 //! Warnings for scenes that will misbehave (issue #7): actors that start overlapping, and
-//! actors fast enough to tunnel (PHYSICS.md §5). `rigid check` and `rigid run` print them;
+//! actors fast enough to tunnel (docs/physics.md §5). `rigid check` and `rigid run` print them;
 //! they do not stop a run.
 
 use crate::math::Scalar;
@@ -8,7 +8,7 @@ use crate::sim::Sim;
 /// Overlap depth below which two actors count as touching, not overlapping, relative to the
 /// thinner one: touching starts are intended (a Newton's cradle).
 pub const OVERLAP_TOLERANCE: Scalar = 1e-6;
-/// Safe travel per step as a fraction of the thinnest actor (PHYSICS.md §5: beyond about a
+/// Safe travel per step as a fraction of the thinnest actor (docs/physics.md §5: beyond about a
 /// quarter the closest face can be the far one, the normal flips and the body passes through).
 pub const TUNNEL_FRACTION: Scalar = 0.25;
 
@@ -16,9 +16,29 @@ pub const TUNNEL_FRACTION: Scalar = 0.25;
 /// systems on the initial state; the sim's clock and counts are left as they were.
 #[must_use]
 pub fn scene_warnings(sim: &mut Sim) -> Vec<String> {
-    let mut out = overlaps(sim);
+    let mut out: Vec<String> = schedule_order(&sim.schedule.names()).into_iter().collect();
+    out.extend(overlaps(sim));
     out.extend(tunnelling(sim));
     out
+}
+
+/// Systems that find or answer contacts, which the paper's order runs before `integrate`.
+const BEFORE_INTEGRATE: [&str; 8] = ["cull", "cull_all_pairs", "prune", "face", "vertex", "edge", "resolve", "solve"];
+
+/// A warning when a schedule runs `integrate` before a contact stage: contacts are then found
+/// and answered for poses the step has already moved on from, one step late.
+#[must_use]
+pub fn schedule_order(names: &[&str]) -> Option<String> {
+    let integrate = names.iter().position(|n| *n == "integrate")?;
+    let late: Vec<&str> = names[integrate..].iter().copied().filter(|n| BEFORE_INTEGRATE.contains(n)).collect();
+    (!late.is_empty()).then(|| {
+        format!(
+            "schedule: 'integrate' runs before {}: contacts are found and answered a step late, so bodies \
+             sink into each other (the default order is {})",
+            late.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", "),
+            crate::systems::DEFAULT_ORDER.join(", ")
+        )
+    })
 }
 
 fn overlaps(sim: &mut Sim) -> Vec<String> {

@@ -1,6 +1,6 @@
 //! `Bodies`: the per-step snapshot of every actor's components as plain arrays (row = the
 //! actor's `ActorIndex`). Pair loops read these, never the world, so they hold no hecs borrows
-//! and are plain data that threads can share (DESIGN.md §3).
+//! and are plain data that threads can share (ARCHITECTURE.md).
 
 use crate::math::{Mat3, Quat, Scalar, Vector, world_inverse_inertia};
 use crate::model::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
@@ -30,7 +30,7 @@ pub struct Bodies {
     pub principal_axes: Vec<Quat>,
     /// Body-frame inverse inertia, zero for fixed actors.
     pub inv_inertia_body: Vec<Mat3>,
-    /// World-frame inverse inertia R I⁻¹ Rᵀ at the snapshot's orientation (PHYSICS.md E9).
+    /// World-frame inverse inertia R I⁻¹ Rᵀ at the snapshot's orientation (docs/physics.md E9).
     pub inv_inertia_world: Vec<Mat3>,
     /// Bounding-sphere radius [m].
     pub radius: Vec<Scalar>,
@@ -65,7 +65,7 @@ impl Bodies {
         self.inv_mass[i] == 0.0
     }
 
-    /// A pair's friction coefficient: the mean of its two actors' (CONTRACTS.md §2).
+    /// A pair's friction coefficient: the mean of its two actors' (docs/scenes.md).
     #[must_use]
     pub fn pair_friction(&self, a: usize, b: usize) -> Scalar {
         0.5 * (self.friction[a] + self.friction[b])
@@ -155,7 +155,7 @@ impl Bodies {
     }
 }
 
-/// A body-frame tensor in world axes, R M Rᵀ (inertia or inverse inertia, PHYSICS.md E9),
+/// A body-frame tensor in world axes, R M Rᵀ (inertia or inverse inertia, docs/physics.md E9),
 /// skipping the two products when M is a multiple of the identity (cubes, regular
 /// tetrahedra, spheres), where rotation cannot change it: the exact value, without the
 /// products' rounding noise, and cheaper for box-gas's 64 000 cubes.

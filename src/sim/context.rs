@@ -38,7 +38,7 @@ impl StepStats {
 }
 
 /// World vertices and planes per body, filled once per step and only for bodies that are in
-/// candidate pairs (DESIGN.md §3).
+/// candidate pairs (ARCHITECTURE.md).
 #[derive(Clone, Debug, Default)]
 pub struct PosedCache {
     entries: Vec<Posed>,
@@ -146,7 +146,7 @@ impl std::fmt::Debug for Scratch {
     }
 }
 
-/// Everything a system may read or write besides the world (DESIGN.md §4).
+/// Everything a system may read or write besides the world (ARCHITECTURE.md).
 #[derive(Debug, Default)]
 pub struct StepContext {
     /// Time step [s].

@@ -9,10 +9,10 @@ use crate::sim::bodies::Bodies;
 pub struct Params {
     /// Gravity [m/s²].
     pub gravity: Vector,
-    /// Most impulse sweeps over the contacts per step (PHYSICS.md §2.5). Sweeps stop earlier
+    /// Most impulse sweeps over the contacts per step (docs/physics.md §2.5). Sweeps stop earlier
     /// when one applies no impulse; the cap matters for e = 1 bodies squeezed between walls.
     pub max_sweeps: u32,
-    /// Fraction β of the penetration removed per step by `correct` (PHYSICS.md §2.6).
+    /// Fraction β of the penetration removed per step by `correct` (docs/physics.md §2.6).
     pub correction: Scalar,
     /// Penetration left alone, as a fraction of the thinner body's thickness (the slop).
     pub slop: Scalar,
@@ -42,8 +42,8 @@ pub struct Params {
 
 /// Substep rate [Hz] the contact solver keeps at least, unless a scene sets its substeps: 4
 /// substeps of a 1/60 s step. A soft contact sinks under a load by load / (m ω²), ω being a
-/// quarter of the substep rate, so with a longer step and the same substeps a tower of ten
-/// unit boxes sinks by the square of the ratio (3 cm at 1/30 s instead of 7 mm).
+/// quarter of the substep rate, so with a longer step and the same substeps a stack sinks by
+/// the square of the ratio.
 pub const MIN_SUBSTEP_RATE: Scalar = 240.0;
 
 impl Params {
@@ -68,8 +68,7 @@ impl Params {
     /// its contacts (else 0): its speed, gravity's gain over the step and its bounding sphere's
     /// spin, times `dt`. The broad phase widens the body's sphere by it, and `prune` and
     /// `solve` widen the pair's contact margin by the sum of the two, so a contact is held
-    /// speculatively the step *before* the bodies meet; a box falling 10 cm a step then lands
-    /// on the floor instead of in it, and a fast cube does not end up half inside another.
+    /// speculatively the step *before* the bodies meet and a fast body lands on another, not in it.
     #[must_use]
     pub fn speculative_distance(&self, dt: Scalar, b: &Bodies, i: usize) -> Scalar {
         if !self.resting_contacts(dt, b.friction[i]) || b.inv_mass[i] == 0.0 {
@@ -94,10 +93,8 @@ impl Params {
 
     /// Solve sweeps in substep `k` (0-based): `iterations` in the first half, one after. The
     /// later substeps start from the earlier ones' impulses, near the solution, and one sweep
-    /// holds them: on a 40-row pyramid 2, 2, 1, 1 stands as well as 2, 2, 2, 2 (4.6 cm against
-    /// 4.4 cm) for 7 % less work, and the 1 000-cube rain of seeds 1–5 is at rest by step 600
-    /// (with 2 in every substep seeds 2, 3 and 5 still stirred at 2e-3 to 1e-2 J); one sweep
-    /// in every substep leaves the pyramid bouncing.
+    /// holds them (a rain of cubes even settles sooner than with more); one sweep in every
+    /// substep leaves a tall pyramid bouncing.
     #[must_use]
     pub fn sweeps(&self, k: u32) -> u32 {
         if k < self.substeps.div_ceil(2) { self.iterations } else { 1 }

@@ -1,5 +1,5 @@
 //! The schedule: an ordered list of named systems, edited by name, run and timed by one
-//! runner (DESIGN.md §5). Systems are plain functions, so a user's own system from outside the
+//! runner (ARCHITECTURE.md). Systems are plain functions, so a user's own system from outside the
 //! crate has the same powers as the shipped ones.
 
 use crate::error::{ScheduleError, StepError};
@@ -99,7 +99,7 @@ impl Schedule {
     /// instead of spreading; the world then keeps the last good step.
     pub fn run(&self, world: &mut World, ctx: &mut StepContext, profile: &mut StepProfile) -> Result<(), StepError> {
         // A small scene's parallel parts are too short to wait for: keeping the other threads
-        // awake would cost more than it saves (a 3-cube pyramid's step 22 -> 33 us).
+        // awake would cost more than it saves.
         if ctx.bodies.len() < KEEP_AWAKE_MIN_BODIES {
             return self.run_systems(world, ctx, profile);
         }
@@ -148,18 +148,13 @@ impl Schedule {
 }
 
 /// Runs `f` on this pool thread while the pool's other threads stay awake, taking the step's
-/// parallel work as soon as it is offered. Without this they fall asleep in each serial part of
-/// the step (sorting, placing constraints), and waking a thread for each of a step's dozen
-/// parallel parts cost 50-85 us apiece on this machine kind, more than many parts take. Outside
-/// a pool, or in a pool of one, `f` runs plainly. The results never depend on it: it changes
-/// only who runs the parallel parts, and no part's arithmetic depends on that.
+/// parallel work as soon as it is offered: otherwise they fall asleep in each serial part of the
+/// step, and waking them costs more than many parallel parts take. Outside a pool, or in a pool
+/// of one, `f` runs plainly. Results never depend on it: it changes only who runs the parts.
 ///
-/// A thread stays only while work keeps coming: after `MAX_IDLE` without any it goes back to
-/// rayon's own sleep. That bounds the wait where the pool does more than one step (a user
-/// stepping several sims in a parallel loop): there a thread may take up the spinning job in
-/// the middle of work the stepping thread waits for, and would otherwise spin for ever. To
-/// make such waits rarer, one step at a time in the process keeps threads awake; steps that
-/// overlap it run plainly.
+/// A kept-awake thread gives up after `MAX_IDLE` without work: in a pool stepping several sims
+/// at once it may take up the spinning job inside work the stepper waits for, and must not spin
+/// there for ever. One step in the process at a time keeps threads awake; others run plainly.
 fn with_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     static KEEPING_AWAKE: AtomicBool = AtomicBool::new(false);
     let Some(me) = rayon::current_thread_index() else { return f() };
@@ -183,9 +178,8 @@ fn with_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
                 }
                 idle_rounds = idle_rounds.wrapping_add(1);
                 // Spin through a short gap; past it, offer the core to the system at every
-                // round (a syscall of about a microsecond when nothing else is waiting): on a
-                // machine busy with other work, a thread spinning while the stepping thread
-                // waits for a core slowed a 40-row pyramid two to four times over.
+                // round: on a machine busy with other work, a thread spinning while the stepping
+                // thread waits for a core slows the step badly.
                 if idle_rounds < SPIN_ROUNDS {
                     std::hint::spin_loop();
                 } else {
@@ -203,16 +197,16 @@ fn with_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     })
 }
 
-/// Bodies (as of the previous step) from which a step keeps the pool awake: a 55-cube
-/// pyramid gains a tenth, 21 cubes break even.
+/// Bodies (as of the previous step) from which a step keeps the pool awake: below it, the
+/// spinning threads cost more than they save.
 const KEEP_AWAKE_MIN_BODIES: usize = 32;
 
 /// Idle rounds a kept-awake thread spins before it starts yielding its core between rounds.
 const SPIN_ROUNDS: u32 = 64;
 
 /// How long a thread kept awake for a step spins without work before it sleeps: longer than
-/// any serial part of a step of the benchmark scenes (a tenth of a millisecond), short enough
-/// that a thread caught spinning where it blocks others holds them up barely.
+/// any serial part of a step of the benchmark scenes, short enough that a thread caught
+/// spinning where it blocks others holds them up barely.
 const MAX_IDLE: Duration = Duration::from_millis(1);
 
 /// Sets its flag to the value it holds when dropped.
@@ -263,8 +257,8 @@ mod tests {
 
     #[test]
     fn steps_run_side_by_side_in_one_pool_finish() {
-        // Each item stands for a step of its own sim. Before a kept-awake thread gave up
-        // after `MAX_IDLE` without work, this hung about one run in twenty.
+        // Each item stands for a step of its own sim; without `MAX_IDLE` a kept-awake thread
+        // could spin here for ever.
         let work = |k: u64| (0..2000_u64).map(|x| x ^ k).sum::<u64>();
         let total: u64 = pool(2).install(|| {
             (0..64_u64)

@@ -29,7 +29,7 @@ pub struct BodyDef {
     pub fixed: bool,
 }
 
-/// Totals over the non-fixed actors (CONTRACTS.md §4).
+/// Totals over the non-fixed actors (docs/cli.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Totals {
     /// Σ m v [kg·m/s].
@@ -52,8 +52,14 @@ pub struct Sim {
     pub time: Scalar,
     /// Steps taken.
     pub steps: u64,
-    /// Impulses applied over the run, by feature (face, vertex, edge).
+    /// Impulses applied over the run, by the feature of the contact (face, vertex, edge):
+    /// each of `resolve`'s, and one for each pair and step the contact solver held a contact
+    /// that a test found.
     pub impulses: [u64; 3],
+    /// Contacts the detection tests found over the run, by test (face, vertex, edge).
+    pub found: [u64; 3],
+    /// Pairs held by the contact solver (`solve`), summed over the steps.
+    pub held: u64,
     /// Timing of the last step.
     pub profile: StepProfile,
     pub(crate) names: Vec<String>,
@@ -71,6 +77,8 @@ impl Sim {
             time: 0.0,
             steps: 0,
             impulses: [0; 3],
+            found: [0; 3],
+            held: 0,
             profile: StepProfile::default(),
             names: Vec::new(),
         }
@@ -126,7 +134,9 @@ impl Sim {
         self.time = self.steps as Scalar * self.ctx.dt;
         for f in Feature::ALL {
             self.impulses[f as usize] += self.ctx.stats.impulses[f as usize];
+            self.found[f as usize] += self.ctx.stats.found[f as usize];
         }
+        self.held += self.ctx.stats.held as u64;
         Ok(())
     }
 
