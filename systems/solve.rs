@@ -6,7 +6,7 @@
 //! is cut into substeps, penetration is pushed out by a stiff damped spring and a rigid relax
 //! pass takes the push-out velocity back, so penetration is removed without adding energy.
 //! This file finds the manifolds and runs the substeps; the solver is in `src/solver/`: its
-//! data (`solver.rs`, `lanes.rs`), the constraints built from the manifolds (`build.rs`), the
+//! data (`mod.rs`, `lanes.rs`), the constraints built from the manifolds (`constraints.rs`), the
 //! passes (`kernel.rs`) and how they are carried out on one thread or two (`drive.rs`).
 //!
 //! Each pair is held along its least-overlap axis (`manifold::contact_axis`), not the detection
@@ -234,8 +234,8 @@ fn substeps(ctx: &mut StepContext) {
 /// held (by the feature that found its contact; near pairs no test found are not counted).
 fn remember(ctx: &mut StepContext) {
     let s = ctx.scratch.get_mut::<SolveScratch>();
-    // In pair order, which is the cache's: each pair's held entry by its index (sorting the
-    // entries themselves, 300 bytes each, cost a third of a millisecond on a 40-row pyramid).
+    // In pair order, which is the cache's: each pair's held entry by its index (cheaper than
+    // sorting the entries themselves, 300 bytes each).
     s.by_pair.clear();
     s.by_pair.resize(s.pairs.len(), u32::MAX);
     for (h, held) in s.held.iter().enumerate() {

@@ -39,11 +39,11 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     // batches, each group placed on its own.
     let (left, last) = (s.left as u32, s.bodies.len() as u32 - 1);
     s.groups[0].offset = 0;
-    s.groups[0].fixed = left;
+    s.groups[0].static_slot = left;
     s.groups[1].offset = left + 1;
-    s.groups[1].fixed = last - (left + 1);
+    s.groups[1].static_slot = last - (left + 1);
     s.groups[2].offset = 0;
-    s.groups[2].fixed = last;
+    s.groups[2].static_slot = last;
     for group in &mut s.groups {
         group.slots.clear();
     }
@@ -58,7 +58,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
             _ => 2,
         };
         let g = &mut s.groups[group];
-        let local = |i: u32| if i == left || i == last { g.fixed } else { i - g.offset };
+        let local = |i: u32| if i == left || i == last { g.static_slot } else { i - g.offset };
         let slot = [local(slot[0]), local(slot[1])];
         g.slots.push(slot);
         s.held.push(HeldPair {
@@ -73,7 +73,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     // beside the first.
     let SolveScratch { groups, held, pairs, manifolds, slot, scale, cache, cached, anchors, recycled, .. } = s;
     let shared = Shared {
-        b,
+        bodies: b,
         params,
         dt,
         meshes: &ctx.meshes,
@@ -104,10 +104,10 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
 
 /// Places group `which`'s constraints in batches (`solver::place`), each batch as long as its
 /// longest manifold, and makes room for their points.
-fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
-    super::place(&group.slots, group.fixed, &mut group.last, &mut group.fill, &mut group.placed);
+pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
+    super::place(&group.slots, group.static_slot, &mut group.last, &mut group.fill, &mut group.placed);
     group.batches.clear();
-    group.batches.extend(group.fill.iter().map(|_| Batch::idle(group.fixed)));
+    group.batches.extend(group.fill.iter().map(|_| Batch::idle(group.static_slot)));
     for (held, &(batch, _)) in held.iter().filter(|h| h.group == which).zip(&group.placed) {
         let batch = &mut group.batches[batch as usize];
         batch.len = batch.len.max(u32::from(held.len));
@@ -123,7 +123,7 @@ fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
 
 /// What `fill` reads.
 struct Shared<'a> {
-    b: &'a Bodies,
+    bodies: &'a Bodies,
     params: &'a crate::sim::context::Params,
     dt: Scalar,
     meshes: &'a crate::model::mesh::MeshTable,
@@ -141,7 +141,7 @@ struct Shared<'a> {
 /// Writes the constraints and points of group `which`'s held pairs into its batches (their
 /// slots in the group's numbering are `group.slots`, in the same order).
 fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
-    let (b, params, dt) = (sh.b, sh.params, sh.dt);
+    let (b, params, dt) = (sh.bodies, sh.params, sh.dt);
     let ConstraintGroup { slots, placed, batches, points, .. } = group;
     // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
     // before integrating forces).
@@ -194,17 +194,7 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
                 inv_det: [0.0; 2],
             };
         }
-        // Each pair of points' coupling (`solver::ContactPoint::coupling`).
-        for j in (0..m.len.saturating_sub(1)).step_by(2) {
-            let (p, q) = (&rows[j], &rows[j + 1]);
-            let coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
-            // Once a step here, not in every sweep: the kernel's division is its slowest step.
-            // The same arithmetic as the kernel's (a rigid row's compliance term is zero).
-            let soft = |k: Scalar| k + compliance * k;
-            let det = [p.k * q.k - coupling * coupling, soft(p.k) * soft(q.k) - coupling * coupling];
-            rows[j].inv_det = det.map(|d| 1.0 / d);
-            rows[j].coupling = coupling;
-        }
+        couple_pairs(&mut rows[..m.len], inv_mass, compliance);
         for (j, row) in rows[..m.len].iter().enumerate() {
             points[first + j].set(lane as usize, row);
         }
@@ -229,6 +219,22 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     }
 }
 
+/// Each pair of points' coupling and inverse determinants (`solver::ContactPoint::coupling`,
+/// `inv_det`), for the points `rows` of one manifold with inverse masses `inv_mass`, and the soft
+/// rows' `Softness::compliance`.
+pub(super) fn couple_pairs(rows: &mut [ContactPoint], inv_mass: [Scalar; 2], compliance: Scalar) {
+    for j in (0..rows.len().saturating_sub(1)).step_by(2) {
+        let (p, q) = (&rows[j], &rows[j + 1]);
+        let coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
+        // Once a step here, not in every sweep: the kernel's division is its slowest step.
+        // The same arithmetic as the kernel's (a rigid row's compliance term is zero).
+        let soft = |k: Scalar| k + compliance * k;
+        let det = [p.k * q.k - coupling * coupling, soft(p.k) * soft(q.k) - coupling * coupling];
+        rows[j].inv_det = det.map(|d| 1.0 / d);
+        rows[j].coupling = coupling;
+    }
+}
+
 /// 1/k, or 0 for k = 0 (a row between two fixed bodies, or an idle one).
 fn inverse(k: Scalar) -> Scalar {
     if k > 0.0 { 1.0 / k } else { 0.0 }
@@ -236,7 +242,7 @@ fn inverse(k: Scalar) -> Scalar {
 
 /// The friction rows of a pair at its patch `centre` (see `solver::Friction`), warm-started
 /// from last step's patch impulses.
-fn friction_patch(
+pub(super) fn friction_patch(
     centre: Vector,
     position: [Vector; 2],
     n: Vector,
@@ -353,7 +359,7 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
 }
 
 /// Two unit vectors completing `n` to a right-handed orthonormal basis.
-fn tangents(n: Vector) -> [Vector; 2] {
+pub(super) fn tangents(n: Vector) -> [Vector; 2] {
     let helper = if n.x.abs() < 0.57 { Vector::X } else { Vector::Y };
     let t1 = n.cross(helper).normalize();
     [t1, n.cross(t1)]

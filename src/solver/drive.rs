@@ -28,13 +28,13 @@ pub(crate) enum Step {
     Move(Scalar),
 }
 
-/// Runs `pass` on group `g` with its bodies `bodies`.
-fn run<B: BodyStore + ?Sized>(pass: Pass, bodies: &mut B, g: &mut ConstraintGroup, h: Scalar) {
+/// Runs `pass` on `group` with its bodies `bodies`.
+fn run<B: BodyStore + ?Sized>(pass: Pass, bodies: &mut B, group: &mut ConstraintGroup, h: Scalar) {
     match pass {
-        Pass::Warm => super::warm_start(bodies, &g.batches, &mut g.points),
-        Pass::Solve(soft) => super::sweep(bodies, &mut g.batches, &mut g.points, h, Some(soft)),
-        Pass::Relax => super::sweep(bodies, &mut g.batches, &mut g.points, h, None),
-        Pass::Restitution(threshold) => super::restitution(bodies, &g.batches, &mut g.points, threshold),
+        Pass::Warm => super::warm_start(bodies, &group.batches, &mut group.points),
+        Pass::Solve(soft) => super::sweep(bodies, &mut group.batches, &mut group.points, h, Some(soft)),
+        Pass::Relax => super::sweep(bodies, &mut group.batches, &mut group.points, h, None),
+        Pass::Restitution(threshold) => super::restitution(bodies, &group.batches, &mut group.points, threshold),
     }
 }
 

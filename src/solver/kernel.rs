@@ -1,45 +1,46 @@
 //! The substep passes over the batches: warm start, the solve and relax sweeps, restitution.
-//! Each works on a batch's four lanes at once, in `f64x4` registers (one AVX instruction per
-//! operation on the project's machines, two SSE2 ones elsewhere); per lane the arithmetic is
-//! that of solving the constraint alone, in the order the `solve` system gave, operation for
-//! operation, so the lanes and a one-by-one solve give the same bits. Where a row's case
-//! depends on its lane (speculative, pushed or rigid; which rows of a block push), every case
-//! is computed and the lane's own selected: no branch on one lane holds up the other three.
-//! The only branches ask whether any lane of the batch needs a costly step (a division, a
-//! root, a block's rarer cases) and skip it when none does.
+//! Each works on a batch's four lanes at once, in `f64x4` registers (`Reg`: one AVX instruction
+//! per operation on the project's machines, two SSE2 ones elsewhere); per lane the arithmetic
+//! is that of solving the constraint alone, in the order the `solve` system gave, operation for
+//! operation, so the lanes and a one-by-one solve give the same bits (the tests of `reference`
+//! check it). Where a row's case depends on its lane (speculative, pushed or rigid; which rows
+//! of a block push), every case is computed and the lane's own selected: no branch on one lane
+//! holds up the other three. The only branches ask whether any lane of the batch needs a costly
+//! step (a division, a root, a block's rarer cases) and skip it when none does.
 
-use super::lanes::{Batch, Lanes, PointRows, Wide};
+use super::lanes::{Batch, LaneVectors, Lanes, PointRows};
 use super::{BodyStore, LANES, Softness};
 use crate::math::Scalar;
 use wide::f64x4;
 
 const _: () = assert!(LANES == 4, "the kernel's registers hold four lanes");
 
-/// One value per lane, in a register.
-type F = f64x4;
+/// Four f64 lanes in one register: one value per lane of a batch.
+type Reg = f64x4;
 
-/// Loads lanes.
+/// Loads one value per lane into a register.
 #[inline(always)]
-fn ld(lanes: &Lanes) -> F {
-    F::new(*lanes)
+fn load(lanes: &Lanes) -> Reg {
+    Reg::new(*lanes)
 }
 
-/// One vector per lane, in registers.
+/// One vector per lane, a register per component.
 #[derive(Clone, Copy)]
-struct V {
-    x: F,
-    y: F,
-    z: F,
+struct RegVec {
+    x: Reg,
+    y: Reg,
+    z: Reg,
 }
 
-impl V {
+impl RegVec {
+    /// Loads one vector per lane.
     #[inline(always)]
-    fn load(w: &Wide) -> Self {
-        Self { x: ld(&w.x), y: ld(&w.y), z: ld(&w.z) }
+    fn load(w: &LaneVectors) -> Self {
+        Self { x: load(&w.x), y: load(&w.y), z: load(&w.z) }
     }
 
     #[inline(always)]
-    fn dot(self, o: Self) -> F {
+    fn dot(self, o: Self) -> Reg {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
 
@@ -51,7 +52,7 @@ impl V {
 
     /// `self += o · s`.
     #[inline(always)]
-    fn add_scaled(&mut self, o: Self, s: F) {
+    fn add_scaled(&mut self, o: Self, s: Reg) {
         self.x += o.x * s;
         self.y += o.y * s;
         self.z += o.z * s;
@@ -59,35 +60,36 @@ impl V {
 
     /// `self -= o · s`.
     #[inline(always)]
-    fn sub_scaled(&mut self, o: Self, s: F) {
+    fn sub_scaled(&mut self, o: Self, s: Reg) {
         self.x -= o.x * s;
         self.y -= o.y * s;
         self.z -= o.z * s;
     }
 }
 
-/// The two bodies of each lane of a batch while it is solved.
+/// The velocities of each lane's two bodies (A, B) while a batch is solved: loaded by `open`,
+/// written back by `close`.
 #[derive(Clone, Copy)]
-struct Ends {
-    va: V,
-    wa: V,
-    vb: V,
-    wb: V,
+struct LaneBodies {
+    va: RegVec,
+    wa: RegVec,
+    vb: RegVec,
+    wb: RegVec,
     /// (v_a − v_b)·n, kept up to date by `push_normal`: the normal rows' linear part.
-    u: F,
+    u: Reg,
     /// Normal impulse applied to `u` and the spins but not yet to the linear velocities
     /// (`flush`): a normal row's linear part is the same for every point of a pair, so it is
     /// kept as one number until something else needs the velocities.
-    held: F,
+    pending: Reg,
 }
 
 /// How far the substeps have moved each lane's bodies: what the passes that read gaps need.
 #[derive(Clone, Copy)]
 struct Motion {
-    dqa: V,
-    dqb: V,
-    /// (dx_a − dx_b)·n: along the normal.
-    d: F,
+    dqa: RegVec,
+    dqb: RegVec,
+    /// (dx_a − dx_b)·n: the bodies' relative displacement along the normal.
+    normal_dx: Reg,
 }
 
 /// The lanes' (A, B) bodies' fields picked by `pick`, as two register vectors.
@@ -96,7 +98,7 @@ fn gather<B: BodyStore + ?Sized>(
     bodies: &B,
     batch: &Batch,
     pick: impl Fn(&super::SolverBody) -> crate::math::Vector,
-) -> [V; 2] {
+) -> [RegVec; 2] {
     let mut out = [[[0.0; LANES]; 3]; 2];
     for end in 0..2 {
         for l in 0..LANES {
@@ -104,17 +106,17 @@ fn gather<B: BodyStore + ?Sized>(
             (out[end][0][l], out[end][1][l], out[end][2][l]) = (v.x, v.y, v.z);
         }
     }
-    out.map(|[x, y, z]| V { x: F::new(x), y: F::new(y), z: F::new(z) })
+    out.map(|[x, y, z]| RegVec { x: Reg::new(x), y: Reg::new(y), z: Reg::new(z) })
 }
 
-impl Ends {
+impl LaneBodies {
     /// Loads the velocities of the bodies of a batch's lanes.
     #[inline(always)]
     fn open<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
         let [va, vb] = gather(bodies, batch, |b| b.v);
         let [wa, wb] = gather(bodies, batch, |b| b.w);
-        let u = va.minus(vb).dot(V::load(&batch.normal));
-        Self { va, wa, vb, wb, u, held: F::ZERO }
+        let u = va.minus(vb).dot(RegVec::load(&batch.normal));
+        Self { va, wa, vb, wb, u, pending: Reg::ZERO }
     }
 
     /// Writes the velocities back, except into a static slot, which must stay zero and whose
@@ -122,8 +124,8 @@ impl Ends {
     #[inline(always)]
     fn close<B: BodyStore + ?Sized>(&mut self, bodies: &mut B, batch: &Batch) {
         self.flush(batch);
-        let lanes = |v: V| [v.x.to_array(), v.y.to_array(), v.z.to_array()];
-        let ends = [(lanes(self.va), lanes(self.wa)), (lanes(self.vb), lanes(self.wb))];
+        let arrays = |v: RegVec| [v.x.to_array(), v.y.to_array(), v.z.to_array()];
+        let ends = [(arrays(self.va), arrays(self.wa)), (arrays(self.vb), arrays(self.wb))];
         for (end, (v, w)) in ends.iter().enumerate() {
             for l in 0..LANES {
                 let slot = batch.slot[end][l];
@@ -136,40 +138,40 @@ impl Ends {
         }
     }
 
-    /// Applies the held normal impulses to the linear velocities.
+    /// Applies the pending normal impulses to the linear velocities.
     #[inline(always)]
     fn flush(&mut self, batch: &Batch) {
-        let n = V::load(&batch.normal);
-        let (sa, sb) = (self.held * ld(&batch.inv_mass[0]), self.held * ld(&batch.inv_mass[1]));
+        let n = RegVec::load(&batch.normal);
+        let (sa, sb) = (self.pending * load(&batch.inv_mass[0]), self.pending * load(&batch.inv_mass[1]));
         self.va.add_scaled(n, sa);
         self.vb.sub_scaled(n, sb);
-        self.held = F::ZERO;
+        self.pending = Reg::ZERO;
     }
 
     /// Relative normal speeds of A against B at points with scaled levers `g`.
     #[inline(always)]
-    fn normal_speed(&self, g: &[Wide; 2]) -> F {
+    fn normal_speed(&self, g: &[LaneVectors; 2]) -> Reg {
         with_levers(self.u, (self.wa, self.wb), g)
     }
 
-    /// Normal impulses `j` at points with scaled levers `g`; `im` is m_a⁻¹ + m_b⁻¹.
+    /// Normal impulses `j` at points with scaled levers `g`; `inv_mass_sum` is m_a⁻¹ + m_b⁻¹.
     #[inline(always)]
-    fn push_normal(&mut self, g: &[Wide; 2], im: F, j: F) {
-        self.wa.add_scaled(V::load(&g[0]), j);
-        self.wb.sub_scaled(V::load(&g[1]), j);
-        self.u += j * im;
-        self.held += j;
+    fn push_normal(&mut self, g: &[LaneVectors; 2], inv_mass_sum: Reg, j: Reg) {
+        self.wa.add_scaled(RegVec::load(&g[0]), j);
+        self.wb.sub_scaled(RegVec::load(&g[1]), j);
+        self.u += j * inv_mass_sum;
+        self.pending += j;
     }
 
     /// Impulses `j` along `d` at the points with scaled levers `g`: +j on A, −j on B.
     #[inline(always)]
-    fn push(&mut self, d: &Wide, g: &[Wide; 2], batch: &Batch, j: F) {
-        let (sa, sb) = (j * ld(&batch.inv_mass[0]), j * ld(&batch.inv_mass[1]));
-        let d = V::load(d);
+    fn push(&mut self, d: &LaneVectors, g: &[LaneVectors; 2], batch: &Batch, j: Reg) {
+        let (sa, sb) = (j * load(&batch.inv_mass[0]), j * load(&batch.inv_mass[1]));
+        let d = RegVec::load(d);
         self.va.add_scaled(d, sa);
-        self.wa.add_scaled(V::load(&g[0]), j);
+        self.wa.add_scaled(RegVec::load(&g[0]), j);
         self.vb.sub_scaled(d, sb);
-        self.wb.sub_scaled(V::load(&g[1]), j);
+        self.wb.sub_scaled(RegVec::load(&g[1]), j);
     }
 }
 
@@ -179,21 +181,21 @@ impl Motion {
     fn open<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
         let [xa, xb] = gather(bodies, batch, |b| b.dx);
         let [dqa, dqb] = gather(bodies, batch, |b| b.dq);
-        let d = xa.minus(xb).dot(V::load(&batch.normal));
-        Self { dqa, dqb, d }
+        let normal_dx = xa.minus(xb).dot(RegVec::load(&batch.normal));
+        Self { dqa, dqb, normal_dx }
     }
 
     /// The gaps of points with scaled levers `g` and starting gaps `gap`, moved on by the
     /// substeps' displacements.
     #[inline(always)]
-    fn gap(&self, g: &[Wide; 2], gap: &Lanes) -> F {
-        with_levers(ld(gap) + self.d, (self.dqa, self.dqb), g)
+    fn gap(&self, g: &[LaneVectors; 2], gap: &Lanes) -> Reg {
+        with_levers(load(gap) + self.normal_dx, (self.dqa, self.dqb), g)
     }
 }
 
 /// A batch's points.
 #[inline(always)]
-fn entries<'a>(batch: &Batch, points: &'a mut [PointRows]) -> &'a mut [PointRows] {
+fn points_of<'a>(batch: &Batch, points: &'a mut [PointRows]) -> &'a mut [PointRows] {
     &mut points[batch.first as usize..(batch.first + batch.len) as usize]
 }
 
@@ -201,18 +203,18 @@ fn entries<'a>(batch: &Batch, points: &'a mut [PointRows]) -> &'a mut [PointRows
 /// at the first substep): a resting stack starts each substep near its solution.
 pub fn warm_start<B: BodyStore + ?Sized>(bodies: &mut B, batches: &[Batch], points: &mut [PointRows]) {
     for batch in batches {
-        let mut e = Ends::open(bodies, batch);
-        let im = ld(&batch.im);
-        for p in entries(batch, points).iter() {
-            e.push_normal(&p.g, im, ld(&p.impulse));
+        let mut lane_bodies = LaneBodies::open(bodies, batch);
+        let inv_mass_sum = load(&batch.inv_mass_sum);
+        for p in points_of(batch, points).iter() {
+            lane_bodies.push_normal(&p.g, inv_mass_sum, load(&p.impulse));
         }
-        e.flush(batch);
+        lane_bodies.flush(batch);
         let f = &batch.friction;
-        e.push(&batch.tangents[0], &f.g[0], batch, ld(&f.impulse[0]));
-        e.push(&batch.tangents[1], &f.g[1], batch, ld(&f.impulse[1]));
-        e.wa.add_scaled(V::load(&f.twist[0]), ld(&f.impulse[2]));
-        e.wb.sub_scaled(V::load(&f.twist[1]), ld(&f.impulse[2]));
-        e.close(bodies, batch);
+        lane_bodies.push(&batch.tangents[0], &f.g[0], batch, load(&f.impulse[0]));
+        lane_bodies.push(&batch.tangents[1], &f.g[1], batch, load(&f.impulse[1]));
+        lane_bodies.wa.add_scaled(RegVec::load(&f.twist[0]), load(&f.impulse[2]));
+        lane_bodies.wb.sub_scaled(RegVec::load(&f.twist[1]), load(&f.impulse[2]));
+        lane_bodies.close(bodies, batch);
     }
 }
 
@@ -220,10 +222,10 @@ pub fn warm_start<B: BodyStore + ?Sized>(bodies: &mut B, batches: &[Batch], poin
 /// constraints lowest first, so one sweep carries a stack's support from the ground up).
 ///
 /// The solve pass (`soft` given) holds the normals with soft position feedback; the relax
-/// pass (`None`) solves friction, holds the normals rigidly, taking a pair's points in reverse
-/// order (so neither end of a manifold is always first), and solves friction again. Friction
-/// only in the relax pass (rapier's "no friction when applying bias"): friction reacting to the
-/// push-out velocities pumps a tall stack's lean.
+/// pass (`None`) solves friction, holds the normals rigidly, taking a manifold's pairs of
+/// points in reverse order (so neither end of a manifold is always first), and solves friction
+/// again. Friction only in the relax pass (rapier's "no friction when applying bias"): friction
+/// reacting to the push-out velocities pumps a tall stack's lean.
 pub fn sweep<B: BodyStore + ?Sized>(
     bodies: &mut B,
     batches: &mut [Batch],
@@ -233,48 +235,57 @@ pub fn sweep<B: BodyStore + ?Sized>(
 ) {
     for batch in batches {
         let motion = Motion::open(bodies, batch);
-        let mut e = Ends::open(bodies, batch);
-        let entries = entries(batch, points);
+        let mut lane_bodies = LaneBodies::open(bodies, batch);
+        let batch_points = points_of(batch, points);
         // Points go in pairs (0, 1), (2, 3): a manifold's diagonals (`manifold::reduce`).
         if soft.is_none() {
             // Friction before the normal rows as well as after: friction at the contact plane
             // turns a body it stops (a block on a slope starts to roll), the normal rows then
             // take that roll back at the corners, and the second friction solve stops the slip
-            // that remains. Once after only, a block on a slope 1 % short of slipping crept
-            // 2 mm before the warm start caught up; with both, 0.8 mm.
-            friction(&mut e, batch, entries);
-            for pair in entries.chunks_mut(2).rev() {
-                normal_pair(&mut e, &motion, batch, pair, h, soft);
+            // that remains. With friction after the normal rows only, a block on a slope just
+            // short of slipping creeps until the warm start catches up.
+            friction(&mut lane_bodies, batch, batch_points);
+            for pair in batch_points.chunks_mut(2).rev() {
+                normal_pair(&mut lane_bodies, &motion, batch, pair, h, soft);
             }
-            e.flush(batch);
-            friction(&mut e, batch, entries);
+            lane_bodies.flush(batch);
+            friction(&mut lane_bodies, batch, batch_points);
         } else {
-            for pair in entries.chunks_mut(2) {
-                normal_pair(&mut e, &motion, batch, pair, h, soft);
+            for pair in batch_points.chunks_mut(2) {
+                normal_pair(&mut lane_bodies, &motion, batch, pair, h, soft);
             }
         }
-        e.close(bodies, batch);
+        lane_bodies.close(bodies, batch);
     }
 }
 
 /// The normal rows of a pair of points (or a last single one) of each lane.
 #[inline(always)]
-fn normal_pair(e: &mut Ends, m: &Motion, batch: &Batch, pair: &mut [PointRows], h: Scalar, soft: Option<Softness>) {
-    let im = ld(&batch.im);
+fn normal_pair(
+    lane_bodies: &mut LaneBodies,
+    motion: &Motion,
+    batch: &Batch,
+    pair: &mut [PointRows],
+    h: Scalar,
+    soft: Option<Softness>,
+) {
+    let inv_mass_sum = load(&batch.inv_mass_sum);
     match pair {
         [p, q] => {
-            let (rp, rq) =
-                (Rows::new(p, m.gap(&p.g, &p.gap), batch, h, soft), Rows::new(q, m.gap(&q.g, &q.gap), batch, h, soft));
-            let (up, uq) = (e.normal_speed(&p.g), e.normal_speed(&q.g));
-            let (new_p, new_q) = block(&rp, &rq, up, uq, (ld(&p.coupling), p.inv_det.map(|d| ld(&d))));
+            let (rp, rq) = (
+                NormalRows::new(p, motion.gap(&p.g, &p.gap), batch, h, soft),
+                NormalRows::new(q, motion.gap(&q.g, &q.gap), batch, h, soft),
+            );
+            let (up, uq) = (lane_bodies.normal_speed(&p.g), lane_bodies.normal_speed(&q.g));
+            let (new_p, new_q) = block(&rp, &rq, up, uq, (load(&p.coupling), p.inv_det.map(|d| load(&d))));
             let (dp, dq) = (settle(p, new_p), settle(q, new_q));
-            e.push_normal(&p.g, im, dp);
-            e.push_normal(&q.g, im, dq);
+            lane_bodies.push_normal(&p.g, inv_mass_sum, dp);
+            lane_bodies.push_normal(&q.g, inv_mass_sum, dq);
         }
         [p] => {
-            let row = Rows::new(p, m.gap(&p.g, &p.gap), batch, h, soft);
-            let dp = settle(p, row.single(e.normal_speed(&p.g)));
-            e.push_normal(&p.g, im, dp);
+            let row = NormalRows::new(p, motion.gap(&p.g, &p.gap), batch, h, soft);
+            let dp = settle(p, row.single(lane_bodies.normal_speed(&p.g)));
+            lane_bodies.push_normal(&p.g, inv_mass_sum, dp);
         }
         _ => {}
     }
@@ -283,81 +294,81 @@ fn normal_pair(e: &mut Ends, m: &Motion, batch: &Batch, pair: &mut [PointRows], 
 /// Stores a point's new accumulated impulses `new` (and the largest so far); returns the
 /// change, the impulse still to apply.
 #[inline(always)]
-fn settle(p: &mut PointRows, new: F) -> F {
-    let change = new - ld(&p.impulse);
+fn settle(p: &mut PointRows, new: Reg) -> Reg {
+    let change = new - load(&p.impulse);
     p.impulse = new.to_array();
-    p.max_impulse = ld(&p.max_impulse).max(new).to_array();
+    p.max_impulse = load(&p.max_impulse).max(new).to_array();
     change
 }
 
 /// The normal rows of one point of every lane.
 #[derive(Clone, Copy)]
-struct Rows {
+struct NormalRows {
     /// Effective mass m and K_ii = 1/m.
-    mass: F,
-    k: F,
+    mass: Reg,
+    k: Reg,
     /// Accumulated impulse λ.
-    impulse: F,
+    impulse: Reg,
     /// Velocity bias b: u + b ≥ 0 is the target.
-    bias: F,
+    bias: Reg,
     /// The soft step's mass and impulse scales (1, 0 when rigid): its update
     /// Δλ = −m s_m (u + b) − s_i λ is a Gauss–Seidel step on the compliant row
     /// u + b + C λ = 0 with C = K_ii s_i / s_m, whose diagonal K_ii + C has inverse m s_m.
-    mass_scale: F,
-    impulse_scale: F,
+    mass_scale: Reg,
+    impulse_scale: Reg,
     /// s_i / s_m (0 when rigid).
-    compliance: F,
+    compliance: Reg,
 }
 
-impl Rows {
-    /// The rows of `r`, whose gaps are `gap` now.
+impl NormalRows {
+    /// The rows of `point`, whose gaps are `gap` now.
     ///
     /// A gap still open may close within this substep (speculative contact, u ≥ −gap/h); a
     /// penetration beyond the slop is pushed out by the soft spring in the solve pass, never
     /// faster than `max_push`, and not at all in the relax pass, which takes the push-out
     /// velocity back; otherwise the row is rigid.
     #[inline(always)]
-    fn new(r: &PointRows, gap: F, batch: &Batch, h: Scalar, soft: Option<Softness>) -> Self {
+    fn new(point: &PointRows, gap: Reg, batch: &Batch, h: Scalar, soft: Option<Softness>) -> Self {
         // Divisions are the kernel's slowest operations: only where a lane needs one.
-        let open = gap.simd_gt(F::ZERO);
-        let speculative = if open.any() { open.select(gap / F::splat(h), F::ZERO) } else { F::ZERO };
-        let rigid = Self::rigid(r, speculative);
+        let open = gap.simd_gt(Reg::ZERO);
+        let speculative = if open.any() { open.select(gap / Reg::splat(h), Reg::ZERO) } else { Reg::ZERO };
+        let rigid = Self::rigid(point, speculative);
         let Some(s) = soft else { return rigid };
-        let slop = ld(&batch.slop);
-        let pushed = !open & (gap + slop).simd_lt(F::ZERO);
-        let push = (F::splat(s.bias_rate) * (gap + slop)).max(-ld(&batch.max_push));
+        let slop = load(&batch.slop);
+        let pushed = !open & (gap + slop).simd_lt(Reg::ZERO);
+        let push = (Reg::splat(s.bias_rate) * (gap + slop)).max(-load(&batch.max_push));
         Self {
             bias: pushed.select(push, rigid.bias),
-            mass_scale: pushed.select(F::splat(s.mass_scale), rigid.mass_scale),
-            impulse_scale: pushed.select(F::splat(s.impulse_scale), rigid.impulse_scale),
-            compliance: pushed.select(F::splat(s.compliance), rigid.compliance),
+            mass_scale: pushed.select(Reg::splat(s.mass_scale), rigid.mass_scale),
+            impulse_scale: pushed.select(Reg::splat(s.impulse_scale), rigid.impulse_scale),
+            compliance: pushed.select(Reg::splat(s.compliance), rigid.compliance),
             ..rigid
         }
     }
 
-    /// The rows of `r` held rigidly with velocity bias `bias`.
+    /// The rows of `point` held rigidly with velocity bias `bias`.
     #[inline(always)]
-    fn rigid(r: &PointRows, bias: F) -> Self {
+    fn rigid(point: &PointRows, bias: Reg) -> Self {
         Self {
-            mass: ld(&r.mass),
-            k: ld(&r.k),
-            impulse: ld(&r.impulse),
+            mass: load(&point.mass),
+            k: load(&point.k),
+            impulse: load(&point.impulse),
             bias,
-            mass_scale: F::ONE,
-            impulse_scale: F::ZERO,
-            compliance: F::ZERO,
+            mass_scale: Reg::ONE,
+            impulse_scale: Reg::ZERO,
+            compliance: Reg::ZERO,
         }
     }
 
     /// Each row's new impulse solved alone, from relative normal speeds `u`.
     #[inline(always)]
-    fn single(&self, u: F) -> F {
+    fn single(&self, u: Reg) -> Reg {
         let dj = -self.mass * self.mass_scale * (u + self.bias) - self.impulse_scale * self.impulse;
-        (self.impulse + dj).max(F::ZERO)
+        (self.impulse + dj).max(Reg::ZERO)
     }
 }
 
-/// Two normal rows of one manifold solved together, from their relative speeds `u`, `v` and
+/// Two normal rows of one manifold solved together, from their relative speeds `up`, `uq` and
 /// coupling K₀₁: the 2×2 linear complementarity problem (K + C) Δλ = −(u + b + C λ),
 /// λ + Δλ ≥ 0, by trying which rows push (Box2D v2's block solver, here over a manifold's
 /// diagonals, whose rows fight each other: pushing one corner tips the body away from the
@@ -368,21 +379,27 @@ impl Rows {
 /// and, when round-off left no case exact, one Gauss–Seidel step each; the later cases only
 /// when some lane is in none of the first three. Returns the new impulses.
 #[inline(always)]
-fn block(p: &Rows, q: &Rows, u: F, v: F, (m01, [inv_rigid, inv_soft]): (F, [F; 2])) -> (F, F) {
-    let zero = F::ZERO;
+fn block(
+    p: &NormalRows,
+    q: &NormalRows,
+    up: Reg,
+    uq: Reg,
+    (m01, [inv_rigid, inv_soft]): (Reg, [Reg; 2]),
+) -> (Reg, Reg) {
+    let zero = Reg::ZERO;
     let (l0, l1) = (p.impulse, q.impulse);
     let idle = q.mass.simd_eq(zero) | p.mass.simd_eq(zero);
     let (cp, cq) = (p.compliance * p.k, q.compliance * q.k);
-    let (r0, r1) = (u + p.bias + cp * l0, v + q.bias + cq * l1);
+    let (r0, r1) = (up + p.bias + cp * l0, uq + q.bias + cq * l1);
     let apart = l0.simd_eq(zero) & l1.simd_eq(zero) & r0.simd_ge(zero) & r1.simd_ge(zero);
     let (m00, m11) = (p.k + cp, q.k + cq);
     let det = m00 * m11 - m01 * m01;
     // Both rows rigid (every row of a relax pass) or both soft: `fill` has divided already, by
     // the same numbers. Only a lane with one row of each divides here.
     let (soft_p, soft_q) = (!p.compliance.simd_eq(zero), !q.compliance.simd_eq(zero));
-    let inv = if (soft_p ^ soft_q).any() { F::ONE / det } else { soft_p.select(inv_soft, inv_rigid) };
+    let inv = if (soft_p ^ soft_q).any() { Reg::ONE / det } else { soft_p.select(inv_soft, inv_rigid) };
     let (both0, both1) = (l0 - (m11 * r0 - m01 * r1) * inv, l1 - (m00 * r1 - m01 * r0) * inv);
-    let both = det.simd_gt(F::splat(1e-9) * m00 * m11) & both0.simd_ge(zero) & both1.simd_ge(zero);
+    let both = det.simd_gt(Reg::splat(1e-9) * m00 * m11) & both0.simd_ge(zero) & both1.simd_ge(zero);
     // The cases of a resting or separating manifold; the others only where a lane needs them.
     let (mut new_p, mut new_q) = (both0, both1);
     if !(idle | apart | both).all() {
@@ -391,7 +408,7 @@ fn block(p: &Rows, q: &Rows, u: F, v: F, (m01, [inv_rigid, inv_soft]): (F, [F; 2
         let second = l1 - (r1 - m01 * l0) * (q.mass * q.mass_scale);
         let second_only = second.simd_ge(zero) & (r0 + m01 * (second - l1) - m00 * l0).simd_ge(zero);
         let neither = (r0 - m00 * l0 - m01 * l1).simd_ge(zero) & (r1 - m01 * l0 - m11 * l1).simd_ge(zero);
-        let (gs0, gs1) = gauss_seidel(p, q, u, v, m01);
+        let (gs0, gs1) = gauss_seidel(p, q, up, uq, m01);
         // Chosen from the last case to the first, so the first that holds wins.
         (new_p, new_q) = (gs0, gs1);
         for (case, a, b) in [(neither, zero, zero), (second_only, zero, second), (first_only, first, zero)] {
@@ -401,7 +418,7 @@ fn block(p: &Rows, q: &Rows, u: F, v: F, (m01, [inv_rigid, inv_soft]): (F, [F; 2
     }
     (new_p, new_q) = (apart.select(zero, new_p), apart.select(zero, new_q));
     if idle.any() {
-        let (gs0, gs1) = gauss_seidel(p, q, u, v, m01);
+        let (gs0, gs1) = gauss_seidel(p, q, up, uq, m01);
         (new_p, new_q) = (idle.select(gs0, new_p), idle.select(gs1, new_q));
     }
     (new_p, new_q)
@@ -410,30 +427,30 @@ fn block(p: &Rows, q: &Rows, u: F, v: F, (m01, [inv_rigid, inv_soft]): (F, [F; 2
 /// One Gauss–Seidel step for each of two rows: for an idle row (a last single point, an idle
 /// pair), or where round-off left no case of `block` exact.
 #[inline(always)]
-fn gauss_seidel(p: &Rows, q: &Rows, u: F, v: F, m01: F) -> (F, F) {
-    let new_p = p.single(u);
-    (new_p, q.single(v + m01 * (new_p - p.impulse)))
+fn gauss_seidel(p: &NormalRows, q: &NormalRows, up: Reg, uq: Reg, m01: Reg) -> (Reg, Reg) {
+    let new_p = p.single(up);
+    (new_p, q.single(uq + m01 * (new_p - p.impulse)))
 }
 
 /// The friction patches of a batch (see `super::Friction`): the two tangent rows together,
 /// clamped to the Coulomb disc of the points' normal impulses, then the twist row. The linear
-/// velocities must be up to date (`Ends::flush`).
+/// velocities must be up to date (`LaneBodies::flush`).
 #[inline(always)]
-fn friction(e: &mut Ends, batch: &mut Batch, entries: &[PointRows]) {
-    let (mut total, mut moment) = (F::ZERO, F::ZERO);
-    for p in entries {
-        let impulse = ld(&p.impulse);
+fn friction(lane_bodies: &mut LaneBodies, batch: &mut Batch, batch_points: &[PointRows]) {
+    let (mut total, mut moment) = (Reg::ZERO, Reg::ZERO);
+    for p in batch_points {
+        let impulse = load(&p.impulse);
         total += impulse;
-        moment += impulse * ld(&p.lever);
+        moment += impulse * load(&p.lever);
     }
-    let dv = e.va.minus(e.vb);
+    let dv = lane_bodies.va.minus(lane_bodies.vb);
     let f = &mut batch.friction;
-    let mu = ld(&batch.mu);
-    let (t1, t2) = (V::load(&batch.tangents[0]), V::load(&batch.tangents[1]));
-    let s1 = with_levers(dv.dot(t1), (e.wa, e.wb), &f.g[0]);
-    let s2 = with_levers(dv.dot(t2), (e.wa, e.wb), &f.g[1]);
-    let [m11, m12, m22] = f.mass.map(|m| ld(&m));
-    let (old1, old2) = (ld(&f.impulse[0]), ld(&f.impulse[1]));
+    let mu = load(&batch.mu);
+    let (t1, t2) = (RegVec::load(&batch.tangents[0]), RegVec::load(&batch.tangents[1]));
+    let s1 = with_levers(dv.dot(t1), (lane_bodies.wa, lane_bodies.wb), &f.g[0]);
+    let s2 = with_levers(dv.dot(t2), (lane_bodies.wa, lane_bodies.wb), &f.g[1]);
+    let [m11, m12, m22] = f.mass.map(|m| load(&m));
+    let (old1, old2) = (load(&f.impulse[0]), load(&f.impulse[1]));
     let (j1, j2) = (old1 - (m11 * s1 + m12 * s2), old2 - (m12 * s1 + m22 * s2));
     let limit = mu * total;
     let len2 = j1 * j1 + j2 * j2;
@@ -447,27 +464,27 @@ fn friction(e: &mut Ends, batch: &mut Batch, entries: &[PointRows]) {
     };
     (f.impulse[0], f.impulse[1]) = (j1.to_array(), j2.to_array());
     let g = f.g;
-    e.push(&batch.tangents[0], &g[0], batch, j1 - old1);
-    e.push(&batch.tangents[1], &g[1], batch, j2 - old2);
+    lane_bodies.push(&batch.tangents[0], &g[0], batch, j1 - old1);
+    lane_bodies.push(&batch.tangents[1], &g[1], batch, j2 - old2);
     let f = &mut batch.friction;
-    let (twist_a, twist_b) = (V::load(&f.twist[0]), V::load(&f.twist[1]));
-    let (sa, sb) = (e.wa.dot(twist_a), e.wb.dot(twist_b));
+    let (twist_a, twist_b) = (RegVec::load(&f.twist[0]), RegVec::load(&f.twist[1]));
+    let (sa, sb) = (lane_bodies.wa.dot(twist_a), lane_bodies.wb.dot(twist_b));
     let limit = mu * moment;
-    let old = ld(&f.impulse[2]);
+    let old = load(&f.impulse[2]);
     // f64::clamp's steps: up to −limit, then down to limit.
-    let jt = old - ld(&f.twist_mass) * (sa - sb);
+    let jt = old - load(&f.twist_mass) * (sa - sb);
     let jt = jt.simd_lt(-limit).select(-limit, jt);
     let jt = jt.simd_gt(limit).select(limit, jt);
     f.impulse[2] = jt.to_array();
-    e.wa.add_scaled(twist_a, jt - old);
-    e.wb.sub_scaled(twist_b, jt - old);
+    lane_bodies.wa.add_scaled(twist_a, jt - old);
+    lane_bodies.wb.sub_scaled(twist_b, jt - old);
 }
 
 /// A row's relative motion in each lane: its linear part plus A's angular part along its lever
 /// minus B's, `linear + a·g_a − b·g_b` (speeds from spins, gaps from turns).
 #[inline(always)]
-fn with_levers(linear: F, (a, b): (V, V), g: &[Wide; 2]) -> F {
-    linear + a.dot(V::load(&g[0])) - b.dot(V::load(&g[1]))
+fn with_levers(linear: Reg, (a, b): (RegVec, RegVec), g: &[LaneVectors; 2]) -> Reg {
+    linear + a.dot(RegVec::load(&g[0])) - b.dot(RegVec::load(&g[1]))
 }
 
 /// Restitution after the substeps (Box2D v3): a point that touched and was approaching faster
@@ -483,43 +500,44 @@ pub fn restitution<B: BodyStore + ?Sized>(
     for batch in batches {
         // Most batches have no point that bounces (resting, or no restitution): their bodies
         // are left as they are without loading them.
-        let may_bounce = |r: &PointRows| (0..LANES).any(|l| batch.restitution[l] > 0.0 && r.approach[l] <= -threshold);
-        if !entries(batch, points).iter().any(may_bounce) {
+        let may_bounce =
+            |point: &PointRows| (0..LANES).any(|l| batch.restitution[l] > 0.0 && point.approach[l] <= -threshold);
+        if !points_of(batch, points).iter().any(may_bounce) {
             continue;
         }
-        let mut e = Ends::open(bodies, batch);
-        let (im, e_n) = (ld(&batch.im), ld(&batch.restitution));
+        let mut lane_bodies = LaneBodies::open(bodies, batch);
+        let (inv_mass_sum, e_n) = (load(&batch.inv_mass_sum), load(&batch.restitution));
         // A point's bouncing lanes, and its rows there: rigid, the target the reversed approach.
-        let bounce = |r: &PointRows| {
-            let approach = ld(&r.approach);
-            let lanes =
-                e_n.simd_gt(F::ZERO) & approach.simd_le(F::splat(-threshold)) & ld(&r.max_impulse).simd_gt(F::ZERO);
-            (lanes, Rows::rigid(r, e_n * approach))
+        let bounce = |point: &PointRows| {
+            let approach = load(&point.approach);
+            let touched = load(&point.max_impulse).simd_gt(Reg::ZERO);
+            let bouncing = e_n.simd_gt(Reg::ZERO) & approach.simd_le(Reg::splat(-threshold)) & touched;
+            (bouncing, NormalRows::rigid(point, e_n * approach))
         };
-        for pair in entries(batch, points).chunks_mut(2) {
+        for pair in points_of(batch, points).chunks_mut(2) {
             match pair {
                 [p, q] => {
                     let ((bp, rp), (bq, rq)) = (bounce(p), bounce(q));
-                    let (u, v) = (e.normal_speed(&p.g), e.normal_speed(&q.g));
-                    let (both_p, both_q) = block(&rp, &rq, u, v, (ld(&p.coupling), p.inv_det.map(|d| ld(&d))));
+                    let (up, uq) = (lane_bodies.normal_speed(&p.g), lane_bodies.normal_speed(&q.g));
+                    let (both_p, both_q) = block(&rp, &rq, up, uq, (load(&p.coupling), p.inv_det.map(|d| load(&d))));
                     let both = bp & bq;
-                    let new_p = both.select(both_p, bp.select(rp.single(u), rp.impulse));
-                    let new_q = both.select(both_q, bq.select(rq.single(v), rq.impulse));
+                    let new_p = both.select(both_p, bp.select(rp.single(up), rp.impulse));
+                    let new_q = both.select(both_q, bq.select(rq.single(uq), rq.impulse));
                     let (dp, dq) = (new_p - rp.impulse, new_q - rq.impulse);
                     (p.impulse, q.impulse) = (new_p.to_array(), new_q.to_array());
-                    e.push_normal(&p.g, im, dp);
-                    e.push_normal(&q.g, im, dq);
+                    lane_bodies.push_normal(&p.g, inv_mass_sum, dp);
+                    lane_bodies.push_normal(&q.g, inv_mass_sum, dq);
                 }
                 [p] => {
                     let (bp, rp) = bounce(p);
-                    let new = bp.select(rp.single(e.normal_speed(&p.g)), rp.impulse);
+                    let new = bp.select(rp.single(lane_bodies.normal_speed(&p.g)), rp.impulse);
                     let dp = new - rp.impulse;
                     p.impulse = new.to_array();
-                    e.push_normal(&p.g, im, dp);
+                    lane_bodies.push_normal(&p.g, inv_mass_sum, dp);
                 }
                 _ => {}
             }
         }
-        e.close(bodies, batch);
+        lane_bodies.close(bodies, batch);
     }
 }

@@ -10,7 +10,7 @@ pub type Lanes = [Scalar; LANES];
 
 /// One vector per lane.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Wide {
+pub struct LaneVectors {
     /// x of each lane.
     pub x: Lanes,
     /// y of each lane.
@@ -19,7 +19,7 @@ pub struct Wide {
     pub z: Lanes,
 }
 
-impl Wide {
+impl LaneVectors {
     /// Zero in every lane.
     pub const ZERO: Self = Self { x: [0.0; LANES], y: [0.0; LANES], z: [0.0; LANES] };
 
@@ -45,13 +45,13 @@ pub struct Batch {
     /// Solver-body slots of A (index 0) and B of each lane.
     pub slot: [[u32; LANES]; 2],
     /// Unit normals, from B to A.
-    pub normal: Wide,
+    pub normal: LaneVectors,
     /// The two tangents.
-    pub tangents: [Wide; 2],
+    pub tangents: [LaneVectors; 2],
     /// Inverse masses of A and B [1/kg].
     pub inv_mass: [Lanes; 2],
-    /// Their sum, the normal rows' linear part of K.
-    pub im: Lanes,
+    /// Their sum m_a⁻¹ + m_b⁻¹, the normal rows' linear part of K.
+    pub inv_mass_sum: Lanes,
     /// Friction coefficients.
     pub mu: Lanes,
     /// Restitutions.
@@ -86,7 +86,7 @@ impl Batch {
         self.tangents[0].set(l, c.tangents[0]);
         self.tangents[1].set(l, c.tangents[1]);
         (self.inv_mass[0][l], self.inv_mass[1][l]) = (c.inv_mass[0], c.inv_mass[1]);
-        self.im[l] = c.inv_mass[0] + c.inv_mass[1];
+        self.inv_mass_sum[l] = c.inv_mass[0] + c.inv_mass[1];
         self.mu[l] = c.mu;
         self.restitution[l] = c.restitution;
         self.slop[l] = c.slop;
@@ -105,9 +105,9 @@ impl Batch {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrictionRows {
     /// g of the two tangents, for A and B.
-    pub g: [[Wide; 2]; 2],
+    pub g: [[LaneVectors; 2]; 2],
     /// S n for A and B.
-    pub twist: [Wide; 2],
+    pub twist: [LaneVectors; 2],
     /// Inverse 2×2 tangent mass (xx, xy, yy).
     pub mass: [Lanes; 3],
     /// Twist mass.
@@ -135,7 +135,7 @@ impl FrictionRows {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PointRows {
     /// g = S (r × n) for A and B.
-    pub g: [Wide; 2],
+    pub g: [LaneVectors; 2],
     /// Effective masses [kg].
     pub mass: Lanes,
     /// Their inverses K_ii [1/kg].

@@ -9,7 +9,8 @@
 //! ŵ = S⁻¹ω with S = (I⁻¹)^½ in world axes (rapier's trick). Then one vector per body and axis,
 //! g = S (r × d), serves both ways: the relative speed along d is Δv·d + ŵ_a·g_a − ŵ_b·g_b, an
 //! impulse j changes ŵ by ±g j, and the effective mass is 1 / (m_a⁻¹ + m_b⁻¹ + |g_a|² + |g_b|²)
-//! (PHYSICS.md §2.5's K, since (r×d)·I⁻¹(r×d) = |S (r×d)|²).
+//! (the K of the corrected collision resolution in docs/physics.md, since
+//! (r×d)·I⁻¹(r×d) = |S (r×d)|²).
 //!
 //! Gauss–Seidel is a chain of dependent steps, so one pair after another runs at the latency
 //! of its arithmetic, not the machine's throughput. The constraints are therefore solved
@@ -29,12 +30,14 @@ mod constraints;
 mod drive;
 mod kernel;
 mod lanes;
+#[cfg(test)]
+mod reference;
 mod scratch;
 
 pub(crate) use constraints::build_constraints;
 pub(crate) use drive::{Pass, Step, drive};
 pub use kernel::{restitution, sweep, warm_start};
-pub use lanes::{Batch, FrictionRows, Lanes, PointRows, Wide};
+pub use lanes::{Batch, FrictionRows, LaneVectors, Lanes, PointRows};
 pub use scratch::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, SolveScratch};
 
 /// A body as the substeps see it.
@@ -264,13 +267,11 @@ pub fn place(slots: &[[u32; 2]], static_slot: u32, last: &mut Vec<u32>, fill: &m
 const CONTACT_DAMPING_RATIO: Scalar = 10.0;
 
 /// Natural frequency of the contact spring as a fraction of the substep rate: a quarter,
-/// Box2D v3's bound for a stable spring (60 Hz at 4 substeps of a 1/60 s step). Box2D and
-/// rapier default to 30 Hz (60 against fixed bodies), which lets a tall stack buckle: a tower
-/// of 20 cubes on 30 Hz contacts, or a 40-row pyramid's out-of-plane lean, has less bending
-/// stiffness than its weight's toppling moment, and falls. A soft contact also sinks under
-/// load by (load)/(effective mass · ω²): the stiffest stable spring keeps a tower of ten
-/// within 7 mm of its height. (At this stiffness one solve sweep a substep leaves a 40-row
-/// pyramid bouncing; `Params::iterations` is 2.)
+/// Box2D v3's bound for a stable spring. Box2D's and rapier's softer default lets a tall stack
+/// buckle: its contacts' bending stiffness falls short of its weight's toppling moment. A soft
+/// contact also sinks under load by load / (effective mass · ω²), so the stiffest stable spring
+/// sinks least. At this stiffness one solve sweep a substep leaves a tall pile bouncing, hence
+/// `Params::iterations` sweeps in the early substeps.
 const HERTZ_PER_SUBSTEP_RATE: Scalar = 0.25;
 
 /// The soft-constraint coefficients of a contact (Catto, "Solver2D", 2024): a damped spring

@@ -15,7 +15,7 @@ pub struct ConstraintGroup {
     /// First solver body of the group's range.
     pub offset: u32,
     /// The group's static slot, in its own numbering.
-    pub fixed: u32,
+    pub static_slot: u32,
     /// Solver-body slots of each constraint, in the group's numbering (for `solver::place`).
     pub slots: Vec<[u32; 2]>,
     /// (batch, lane) of each constraint.
