@@ -1,10 +1,12 @@
 //! A small software renderer for `rigid render`: perspective camera, z-buffered flat-shaded
-//! triangles, a ground grid and axes, and an optional overlay of the step's contacts. No GPU
-//! and no window; `image` encodes the frames.
+//! triangles, a ground grid and axes, and an optional overlay of contacts. No GPU and no
+//! window; `image` encodes the frames.
 
+use crate::collision::contact::{Contact, Pair};
 use crate::math::{Scalar, Vector};
 use crate::sim::Sim;
 use image::{Rgb, RgbImage};
+use std::collections::HashSet;
 
 /// A pinhole camera looking from `eye` at `target`, +y up.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -25,17 +27,26 @@ const VIEW_DIRECTION: Vector = Vector::new(0.9, 0.75, 1.3);
 const LIGHT: Vector = Vector::new(0.4, 1.0, 0.6);
 /// Nearest depth drawn [m]: triangles reaching closer than this are skipped, not clipped.
 const NEAR: Scalar = 0.05;
+/// Room left around the fitted actors, as a factor on the radius of the sphere holding them.
+const FIT_MARGIN: Scalar = 1.15;
+/// Smallest radius a camera is fitted to [m], so it stays well beyond `NEAR`.
+const FIT_MIN_RADIUS: Scalar = 0.1;
 const SKY: Rgb<u8> = Rgb([236, 240, 245]);
 const GRID: Rgb<u8> = Rgb([180, 186, 196]);
 
 impl Camera {
-    /// A camera that sees every actor of `sim` (bounding spheres), from a three-quarter view.
+    /// A camera for `sim` from a three-quarter view, fitted to what moves: the bounding spheres
+    /// of the free actors now, with a margin, and (under downward gravity) where each would
+    /// come to lie on the fixed actor below it. Fixed actors are drawn as context but do not
+    /// widen the view, so a 20 m floor does not shrink a pile on it to a few pixels. With no
+    /// free actors, it sees every actor.
     #[must_use]
     pub fn fit(sim: &Sim) -> Self {
-        let (lo, hi) = scene_bounds(sim);
-        let target = (lo + hi) * 0.5;
-        let radius = ((hi - lo) * 0.5).length().max(0.5);
         let fov_y = DEFAULT_FOV_DEGREES.to_radians();
+        let (target, radius) = fit_sphere(sim).unwrap_or_else(|| {
+            let (lo, hi) = scene_bounds(sim);
+            ((lo + hi) * 0.5, ((hi - lo) * 0.5).length().max(0.5))
+        });
         let distance = radius / (fov_y * 0.5).sin() * 1.05;
         Self { eye: target + VIEW_DIRECTION.normalize() * distance, target, fov_y }
     }
@@ -59,6 +70,70 @@ impl Camera {
         let focal = f64::from(height) * 0.5 / (self.fov_y * 0.5).tan();
         Some((f64::from(width) * 0.5 + v.x / v.z * focal, f64::from(height) * 0.5 - v.y / v.z * focal, v.z))
     }
+}
+
+/// A sphere (centre, radius) holding the free actors' bounding spheres and, when gravity pulls
+/// down, each one's landing place on the highest fixed actor under its centre; `None` when no
+/// actor is free.
+fn fit_sphere(sim: &Sim) -> Option<(Vector, Scalar)> {
+    let mut moving = Vec::new();
+    let mut fixed = Vec::new();
+    let mut query = sim.world.query::<(&crate::Pose, &crate::Mesh, &crate::BoundingSphere, &crate::MassProps)>();
+    for (pose, mesh, sphere, mass) in query.iter() {
+        if mass.is_fixed() {
+            fixed.push(actor_bounds(sim, pose, mesh));
+        } else {
+            moving.push((pose.position, sphere.radius));
+        }
+    }
+    drop(query);
+    if moving.is_empty() {
+        return None;
+    }
+    if sim.ctx.params.gravity.y < 0.0 {
+        let landings: Vec<_> = moving
+            .iter()
+            .filter_map(|&(c, r)| {
+                let top = fixed
+                    .iter()
+                    .filter(|(lo, hi)| hi.y <= c.y && (lo.x..=hi.x).contains(&c.x) && (lo.z..=hi.z).contains(&c.z))
+                    .map(|(_, hi)| hi.y)
+                    .fold(Scalar::NEG_INFINITY, Scalar::max);
+                top.is_finite().then_some((Vector::new(c.x, (top + r).min(c.y), c.z), r))
+            })
+            .collect();
+        moving.extend(landings);
+    }
+    let (lo, hi) = moving
+        .iter()
+        .fold((Vector::INFINITY, Vector::NEG_INFINITY), |(lo, hi), &(c, r)| (lo.min(c - r), hi.max(c + r)));
+    let centre = (lo + hi) * 0.5;
+    let radius = moving.iter().map(|&(c, r)| (c - centre).length() + r).fold(0.0, Scalar::max);
+    (centre.is_finite() && radius.is_finite()).then_some((centre, (radius * FIT_MARGIN).max(FIT_MIN_RADIUS)))
+}
+
+/// Axis-aligned bounds of one actor's vertices [m].
+fn actor_bounds(sim: &Sim, pose: &crate::Pose, mesh: &crate::Mesh) -> (Vector, Vector) {
+    sim.ctx.meshes.get(mesh.id).vertices.iter().fold((Vector::INFINITY, Vector::NEG_INFINITY), |(lo, hi), &v| {
+        let p = pose.transform_point(v);
+        (lo.min(p), hi.max(p))
+    })
+}
+
+/// The top of the floor: the lowest fixed actor that is flat (no taller than a tenth of its
+/// width) and covers at least a quarter of the scene's footprint.
+fn floor_top(sim: &Sim, (lo, hi): (Vector, Vector)) -> Option<Scalar> {
+    let area = |lo: Vector, hi: Vector| (hi.x - lo.x) * (hi.z - lo.z);
+    let mut query = sim.world.query::<(&crate::Pose, &crate::Mesh, &crate::MassProps)>();
+    query
+        .iter()
+        .filter(|(_, _, mass)| mass.is_fixed())
+        .map(|(pose, mesh, _)| actor_bounds(sim, pose, mesh))
+        .filter(|&(flo, fhi)| {
+            fhi.y - flo.y <= 0.1 * (fhi.x - flo.x).min(fhi.z - flo.z) && area(flo, fhi) >= 0.25 * area(lo, hi)
+        })
+        .map(|(_, fhi)| fhi.y)
+        .min_by(Scalar::total_cmp)
 }
 
 /// Axis-aligned bounds of every actor's vertices [m].
@@ -96,19 +171,75 @@ pub fn actor_colour(index: usize, fixed: bool) -> [u8; 3] {
     [r, g, b].map(|k| ((k + m) * 255.0).round() as u8)
 }
 
+/// The contacts `sim`'s last step found (none before the first step).
+pub fn step_contacts(sim: &Sim) -> impl Iterator<Item = Contact> + '_ {
+    sim.ctx.pairs.iter().filter_map(Pair::contact)
+}
+
+/// The contacts of the steps since the last frame, for that frame's overlay: a frame shows one
+/// step in K, and an impact between two frames would otherwise never be seen. A contact found
+/// again at the same place (a body resting) is kept once.
+#[derive(Clone, Debug, Default)]
+pub struct ContactTrail {
+    contacts: Vec<Contact>,
+    seen: HashSet<[i64; 6]>,
+}
+
+impl ContactTrail {
+    /// Adds the contacts of `sim`'s last step.
+    pub fn record(&mut self, sim: &Sim) {
+        for c in step_contacts(sim) {
+            // Same place to a tenth of a millimetre, same direction to a thousandth.
+            let p = (c.point * 1e4).round();
+            let n = (c.normal * 1e3).round();
+            if self.seen.insert([p.x, p.y, p.z, n.x, n.y, n.z].map(|k| k as i64)) {
+                self.contacts.push(c);
+            }
+        }
+    }
+
+    /// The contacts recorded since the last `clear`.
+    #[must_use]
+    pub fn contacts(&self) -> &[Contact] {
+        &self.contacts
+    }
+
+    /// Forgets them (after a frame is drawn).
+    pub fn clear(&mut self) {
+        self.contacts.clear();
+        self.seen.clear();
+    }
+}
+
 /// What to draw besides the bodies.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Overlay {
-    /// Draw this step's contact points and normals.
+    /// Draw contact points and normals: this step's (`render`) or the ones given
+    /// (`render_with_contacts`).
     pub contacts: bool,
     /// Fill fixed actors too. By default they are drawn as outlines, so the walls of a closed
     /// box do not hide what moves inside it.
     pub solid_fixed: bool,
 }
 
-/// Renders the current state of `sim`.
+/// Renders the current state of `sim`, with the contacts of its last step if asked.
 #[must_use]
 pub fn render(sim: &Sim, camera: &Camera, width: u32, height: u32, overlay: Overlay) -> RgbImage {
+    let contacts: Vec<Contact> = if overlay.contacts { step_contacts(sim).collect() } else { Vec::new() };
+    render_with_contacts(sim, camera, width, height, overlay, &contacts)
+}
+
+/// Renders the current state of `sim`, with `contacts` (e.g. a `ContactTrail`'s) if
+/// `overlay.contacts`.
+#[must_use]
+pub fn render_with_contacts(
+    sim: &Sim,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    overlay: Overlay,
+    contacts: &[Contact],
+) -> RgbImage {
     let mut canvas = Canvas::new(width, height);
     canvas.grid(sim, camera);
     let light = LIGHT.normalize();
@@ -137,7 +268,7 @@ pub fn render(sim: &Sim, camera: &Camera, width: u32, height: u32, overlay: Over
     }
     if overlay.contacts {
         let scale = (camera.target - camera.eye).length() * 0.04;
-        for c in sim.ctx.pairs.iter().filter_map(crate::Pair::contact) {
+        for c in contacts {
             canvas.line(camera, c.point, c.point + c.normal * scale * 2.0, Rgb([220, 30, 30]), false);
             for axis in [Vector::X, Vector::Y, Vector::Z] {
                 canvas.line(
@@ -220,14 +351,28 @@ impl Canvas {
         }
     }
 
-    /// A ground grid under the scene and short axes at the origin (x red, y green, z blue).
+    /// A ground grid under the scene, on the floor's top if there is one, and short axes at
+    /// the origin (x red, y green, z blue). Its spacing follows what the camera sees, and it
+    /// stops a few views' widths from the target, so a close view of a pile on a wide floor
+    /// still gets a grid of useful size.
     fn grid(&mut self, sim: &Sim, camera: &Camera) {
         let (lo, hi) = scene_bounds(sim);
+        // About the width of the picture at the target's distance.
+        let view = 2.0 * (camera.target - camera.eye).length() * (camera.fov_y * 0.5).tan();
         let extent = (hi.x - lo.x).max(hi.z - lo.z).max(1.0);
+        let reach = 2.0 * view;
+        let (t, near) = (camera.target, |a: Scalar, b: Scalar, t: Scalar| (a.max(t - reach), b.min(t + reach)));
+        let ((xa, xb), (za, zb)) = (near(lo.x, hi.x, t.x), near(lo.z, hi.z, t.z));
+        // Looking away from the scene: the whole scene's grid, as coarse as before.
+        let ((xa, xb), (za, zb), extent) = if xa <= xb && za <= zb && view > 0.0 {
+            ((xa, xb), (za, zb), extent.min(view.max(0.1)))
+        } else {
+            ((lo.x, hi.x), (lo.z, hi.z), extent)
+        };
         let step = nice_step(extent / 10.0);
-        let (x0, x1) = ((lo.x / step).floor() * step, (hi.x / step).ceil() * step);
-        let (z0, z1) = ((lo.z / step).floor() * step, (hi.z / step).ceil() * step);
-        let y = lo.y;
+        let (x0, x1) = ((xa / step).floor() * step, (xb / step).ceil() * step);
+        let (z0, z1) = ((za / step).floor() * step, (zb / step).ceil() * step);
+        let y = floor_top(sim, (lo, hi)).unwrap_or(lo.y);
         let mut x = x0;
         while x <= x1 + 1e-9 {
             self.line(camera, Vector::new(x, y, z0), Vector::new(x, y, z1), GRID, true);
