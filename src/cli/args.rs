@@ -161,19 +161,22 @@ impl Default for RunArgs {
 /// `rigid bench`.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Scene: `box-gas`, `pyramid` or `rain` (docs/benchmarks.md).
-    #[arg(value_parser = ["box-gas", "pyramid", "rain"])]
+    /// Scene: `box-gas`, `pyramid`, `rain` or `hull-rain` (docs/benchmarks.md).
+    #[arg(value_parser = ["box-gas", "pyramid", "rain", "hull-rain"])]
     pub scene: String,
-    /// Cube counts, comma-separated (box-gas, rain).
+    /// Body counts, comma-separated (box-gas, rain, hull-rain).
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub actors: Vec<u32>,
     /// Base rows, comma-separated (pyramid).
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub base: Vec<u32>,
-    /// Timed steps (default 200 for box-gas, 600 for pyramid and rain).
+    /// Subdivisions of hull-rain's icospheres, 0..=5 (hull-rain only; default 2: 162 vertices).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(crate::model::shapes::MAX_SUBDIVISIONS)))]
+    pub subdivisions: Option<u32>,
+    /// Timed steps (default 200 for box-gas, 600 for pyramid, rain and hull-rain).
     #[arg(long, value_parser = parse_steps)]
     pub steps: Option<u64>,
-    /// Untimed warm-up steps (default 20 for box-gas, 0 for pyramid and rain).
+    /// Untimed warm-up steps (default 20 for box-gas, 0 for pyramid, rain and hull-rain).
     #[arg(long, value_parser = parse_steps)]
     pub warmup: Option<u64>,
     /// Scene seed.

@@ -4,7 +4,7 @@
 use super::{AppError, check_writable, outln, write_error, write_out};
 use crate::cli::args::BenchArgs;
 use crate::math::Vector;
-use crate::scene::benchmarks::{BenchScene, rain_half_width, scene_sim};
+use crate::scene::benchmarks::{BenchScene, DEFAULT_HULL_RAIN_SUBDIVISIONS, rain_half_width, scene_sim};
 use crate::scene::spawners::box_gas_half_extent;
 use crate::sim::schedule::StepProfile;
 use std::collections::BTreeMap;
@@ -15,11 +15,14 @@ use std::time::Duration;
 pub struct BenchResult {
     /// Scene name.
     pub scene: &'static str,
-    /// Number of free cubes.
+    /// Number of free cubes (hull-rain: icospheres).
     pub actors: u32,
     /// Pyramid only: cubes in the base row.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub base: Option<u32>,
+    /// Hull-rain only: subdivisions of the icospheres.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub subdivisions: Option<u32>,
     /// Timed steps.
     pub steps: u64,
     /// Untimed warm-up steps.
@@ -44,7 +47,7 @@ pub struct BenchResult {
     /// Pyramid: largest distance of any cube centre from its start [m].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_displacement_m: Option<f64>,
-    /// Rain: cubes whose centre ended outside the container (or below the floor).
+    /// Rain and hull-rain: bodies whose centre ended outside the container (or below the floor).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outside: Option<usize>,
     /// Peak resident memory of the process so far [MiB] (runs go in ascending size, so each
@@ -106,7 +109,7 @@ pub fn run(
         BenchScene::Pyramid => {
             (None, Some(end.iter().zip(&start).map(|(x, x0)| (*x - *x0).length()).fold(0.0, f64::max)), None)
         }
-        BenchScene::Rain => {
+        BenchScene::Rain | BenchScene::HullRain { .. } => {
             let a = rain_half_width(size);
             (None, None, Some(end.iter().filter(|x| x.x.abs() > a || x.z.abs() > a || x.y < 0.0).count()))
         }
@@ -115,6 +118,10 @@ pub fn run(
         scene: scene.name(),
         actors: cubes.len() as u32,
         base: (scene == BenchScene::Pyramid).then_some(size),
+        subdivisions: match scene {
+            BenchScene::HullRain { subdivisions } => Some(subdivisions),
+            _ => None,
+        },
         steps,
         warmup,
         seed,
@@ -157,8 +164,15 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), AppError> {
     let (scene, mut sizes) = match args.scene.as_str() {
         "pyramid" => (BenchScene::Pyramid, args.base.clone()),
         "rain" => (BenchScene::Rain, args.actors.clone()),
+        "hull-rain" => {
+            let subdivisions = args.subdivisions.unwrap_or(DEFAULT_HULL_RAIN_SUBDIVISIONS);
+            (BenchScene::HullRain { subdivisions }, args.actors.clone())
+        }
         _ => (BenchScene::BoxGas, args.actors.clone()),
     };
+    if args.subdivisions.is_some() && !matches!(scene, BenchScene::HullRain { .. }) {
+        return Err(AppError::Usage(format!("bench {}: --subdivisions applies to hull-rain only", scene.name())));
+    }
     if sizes.is_empty() {
         let flag = if scene == BenchScene::Pyramid { "--base" } else { "--actors" };
         return Err(AppError::Usage(format!("bench {}: give {flag} N[,N...]", scene.name())));

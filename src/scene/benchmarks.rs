@@ -1,6 +1,6 @@
 //! The resting-contact benchmark scenes of docs/benchmarks.md, built exactly as the peer harness
 //! builds them so both engines start from the same state: the `pyramid` of unit cubes on a
-//! ground slab, and the `rain` of cubes dropped into an open box.
+//! ground slab, and the `rain` of cubes dropped into an open box (hull-rain: of icospheres).
 
 use crate::math::{Scalar, Vector};
 use crate::model::components::{Material, Pose, Velocity};
@@ -75,12 +75,30 @@ pub fn rain_half_width(n: u32) -> Scalar {
     f64::from(rain_columns(n)) - 1.0 + 1.5
 }
 
+/// The shape of the rain's (and the other benchmark scenes') cubes: 1 m on a side.
+pub const UNIT_CUBE: ShapeDef = ShapeDef::Box { size: (1.0, 1.0, 1.0) };
+
+/// Radius of hull-rain's icospheres [m].
+pub const HULL_RAIN_RADIUS: Scalar = 0.5;
+
+/// Subdivisions of hull-rain's icospheres when `rigid bench hull-rain` is given none.
+pub const DEFAULT_HULL_RAIN_SUBDIVISIONS: u32 = 2;
+
 /// The rain: `n` unit cubes in layers of g × g (2 m apart, jittered ±0.1 m, turned uniformly at
 /// random; 6 SplitMix64 draws each), the lowest layer at y = 10, over an open box of 8 m walls,
 /// 1 m thick, on a floor slab reaching 50 m past the walls; friction 0.5, restitution 0.2.
 /// Floor and walls come first, then the cubes (`cube-<i>`).
 #[must_use]
 pub fn rain(n: u32, seed: u64) -> Vec<Instance> {
+    rain_of(n, seed, &UNIT_CUBE)
+}
+
+/// The rain of `n` bodies of `shape`: the unit cube gives `rain` exactly (mass 1, `cube-<i>`);
+/// any other shape has density 1 kg/m³ and is named after its kind (`icosphere-<i>`, ...).
+/// The lattice, jitter, orientations, draws and container are those of `rain` whatever the
+/// shape, so shapes wider than about 1.8 m start overlapping their neighbours.
+#[must_use]
+pub fn rain_of(n: u32, seed: u64, shape: &ShapeDef) -> Vec<Instance> {
     let material = Material { restitution: 0.2, friction: 0.5 };
     let g = rain_columns(n);
     let half_span = f64::from(g) - 1.0;
@@ -115,9 +133,34 @@ pub fn rain(n: u32, seed: u64) -> Vec<Instance> {
         let j = Vector::new(rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1));
         let u = Vector::new(rng.unit(), rng.unit(), rng.unit());
         let position = Vector::new(ix * 2.0 - half_span + j.x, y0 + iy * 2.0 + j.y, iz * 2.0 - half_span + j.z);
-        out.push(cube(format!("cube-{i}"), Pose { position, orientation: uniform_rotation(u) }, material));
+        let pose = Pose { position, orientation: uniform_rotation(u) };
+        out.push(if *shape == UNIT_CUBE {
+            cube(format!("cube-{i}"), pose, material)
+        } else {
+            Instance {
+                name: format!("{}-{i}", kind(shape)),
+                shape: shape.clone(),
+                mass: MassSpec::Density(1.0),
+                pose,
+                velocity: Velocity::default(),
+                material,
+                fixed: false,
+            }
+        });
     }
     out
+}
+
+/// A shape's kind in lower case, as it names actors.
+fn kind(shape: &ShapeDef) -> &'static str {
+    match shape {
+        ShapeDef::Box { .. } => "box",
+        ShapeDef::Tetrahedron { .. } => "tetrahedron",
+        ShapeDef::Octahedron { .. } => "octahedron",
+        ShapeDef::Icosphere { .. } => "icosphere",
+        ShapeDef::Cylinder { .. } => "cylinder",
+        ShapeDef::Obj { .. } => "obj",
+    }
 }
 
 /// The benchmark scenes.
@@ -129,6 +172,12 @@ pub enum BenchScene {
     Pyramid,
     /// Cubes dropped into an open box (size = cubes).
     Rain,
+    /// The rain with icospheres of radius 0.5 m and density 1 kg/m³ instead of cubes
+    /// (size = bodies).
+    HullRain {
+        /// Subdivisions of the icosahedron, 0..=5 (S = 1 has 42 vertices, S = 2 has 162).
+        subdivisions: u32,
+    },
 }
 
 impl BenchScene {
@@ -139,6 +188,7 @@ impl BenchScene {
             Self::BoxGas => "box-gas",
             Self::Pyramid => "pyramid",
             Self::Rain => "rain",
+            Self::HullRain { .. } => "hull-rain",
         }
     }
 
@@ -148,16 +198,20 @@ impl BenchScene {
             Self::BoxGas => box_gas(size, seed),
             Self::Pyramid => pyramid(size),
             Self::Rain => rain(size, seed),
+            Self::HullRain { subdivisions } => {
+                rain_of(size, seed, &ShapeDef::Icosphere { radius: HULL_RAIN_RADIUS, subdivisions })
+            }
         }
     }
 
-    /// Which actor indices are the cubes: box-gas puts its 6 walls after them, the others
-    /// their ground (1) or floor and walls (5) before, as the peer harness does.
+    /// Which actor indices are the cubes (hull-rain: the icospheres): box-gas puts its 6 walls
+    /// after them, the others their ground (1) or floor and walls (5) before, as the peer
+    /// harness does.
     pub fn cubes(self, actors: usize) -> std::ops::Range<usize> {
         match self {
             Self::BoxGas => 0..actors - 6,
             Self::Pyramid => 1..actors,
-            Self::Rain => 5..actors,
+            Self::Rain | Self::HullRain { .. } => 5..actors,
         }
     }
 }

@@ -54,13 +54,18 @@ pub enum SpawnerDef {
         /// Cubes in the bottom row.
         base: u32,
     },
-    /// The rain benchmark scene of docs/benchmarks.md: `actors` cubes dropped into an open box.
+    /// The rain benchmark scene of docs/benchmarks.md: `actors` bodies dropped into an open box,
+    /// unit cubes of mass 1 unless `shape` says otherwise.
     Rain {
-        /// Number of cubes.
+        /// Number of bodies.
         actors: u32,
         /// SplitMix64 seed (default 1).
         #[serde(default = "one")]
         seed: u64,
+        /// Shape of the bodies (default the unit cube, mass 1 kg); any other shape has density
+        /// 1 kg/m³. Same lattice, jitter, orientations and container whatever the shape.
+        #[serde(default = "unit_cube")]
+        shape: ShapeDef,
     },
     /// The box-gas benchmark scene of docs/benchmarks.md: `actors` unit cubes in a closed box.
     BoxGas {
@@ -74,6 +79,10 @@ pub enum SpawnerDef {
 
 fn one() -> u64 {
     1
+}
+
+fn unit_cube() -> ShapeDef {
+    crate::scene::benchmarks::UNIT_CUBE
 }
 
 /// One actor ready to build: a shape, mass, pose, velocities and material.
@@ -146,7 +155,8 @@ impl SpawnerDef {
                 finite_nonneg("speed", *speed)?;
                 finite_nonneg("spin", *spin)
             }
-            Self::BoxGas { .. } | Self::Pyramid { .. } | Self::Rain { .. } => Ok(()),
+            Self::Rain { shape, .. } => check_shape(shape),
+            Self::BoxGas { .. } | Self::Pyramid { .. } => Ok(()),
         }
     }
 
@@ -192,7 +202,53 @@ impl SpawnerDef {
             }
             Self::BoxGas { actors, seed } => box_gas(*actors, *seed),
             Self::Pyramid { base } => crate::scene::benchmarks::pyramid(*base),
-            Self::Rain { actors, seed } => crate::scene::benchmarks::rain(*actors, *seed),
+            Self::Rain { actors, seed, shape } => crate::scene::benchmarks::rain_of(*actors, *seed, shape),
+        }
+    }
+}
+
+/// The checks an actor's shape gets when parsed (`ShapeDef::check` in schema.rs, which is private
+/// there; `shape_checks_agree_with_the_actor_checks` below keeps the two in step), for a
+/// spawner's `shape`; `Err((field, reason))` with the field as `shape.<name>`.
+fn check_shape(shape: &ShapeDef) -> Result<(), (String, String)> {
+    use crate::model::shapes::{MAX_SUBDIVISIONS, SEGMENTS_RANGE};
+    let positive = |field: &str, v: Scalar| {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err((format!("shape.{field}"), format!("must be a finite number > 0 m, got {v}")))
+        }
+    };
+    match shape {
+        ShapeDef::Box { size: (x, y, z) } => {
+            [("size.x", *x), ("size.y", *y), ("size.z", *z)].iter().try_for_each(|(f, v)| positive(f, *v))
+        }
+        ShapeDef::Tetrahedron { edge } => positive("edge", *edge),
+        ShapeDef::Octahedron { radius } => positive("radius", *radius),
+        ShapeDef::Icosphere { radius, subdivisions } => {
+            positive("radius", *radius)?;
+            if *subdivisions > MAX_SUBDIVISIONS {
+                return Err((
+                    "shape.subdivisions".into(),
+                    format!("must be 0..={MAX_SUBDIVISIONS}, got {subdivisions}"),
+                ));
+            }
+            Ok(())
+        }
+        ShapeDef::Cylinder { radius, height, segments } => {
+            positive("radius", *radius)?;
+            positive("height", *height)?;
+            if !SEGMENTS_RANGE.contains(segments) {
+                let (lo, hi) = (SEGMENTS_RANGE.start(), SEGMENTS_RANGE.end());
+                return Err(("shape.segments".into(), format!("must be {lo}..={hi}, got {segments}")));
+            }
+            Ok(())
+        }
+        ShapeDef::Obj { path, scale } => {
+            if path.is_empty() {
+                return Err(("shape.path".into(), "must name an OBJ file".into()));
+            }
+            positive("scale", *scale)
         }
     }
 }
@@ -320,5 +376,59 @@ mod tests {
         assert!(close(cubes[1].pose.position, [-7.009012, -8.993984, -9.012807]));
         assert_eq!(cubes.len(), 1006);
         assert!(cubes[1000..].iter().all(|w| w.fixed));
+    }
+
+    #[test]
+    fn shape_checks_agree_with_the_actor_checks() {
+        // A spawner's shape is judged as an actor's: same verdict, same field, same reason.
+        let shapes = [
+            "Box(size: (1.0, 2.0, 3.0))",
+            "Box(size: (1.0, 0.0, 3.0))",
+            "Box(size: (1.0, 2.0, inf))",
+            "Box(size: (-1.0, 2.0, 3.0))",
+            "Tetrahedron(edge: 1.0)",
+            "Tetrahedron(edge: NaN)",
+            "Octahedron(radius: 0.5)",
+            "Octahedron(radius: 0.0)",
+            "Icosphere(radius: 0.5, subdivisions: 5)",
+            "Icosphere(radius: -1.0, subdivisions: 1)",
+            "Icosphere(radius: 0.5, subdivisions: 6)",
+            "Cylinder(radius: 0.5, height: 1.0, segments: 3)",
+            "Cylinder(radius: 0.5, height: 1.0, segments: 2)",
+            "Cylinder(radius: 0.5, height: 1.0, segments: 257)",
+            "Cylinder(radius: 0.5, height: -1.0, segments: 8)",
+            "Cylinder(radius: 0.0, height: 1.0, segments: 8)",
+            "Obj(path: \"a.obj\")",
+            "Obj(path: \"\")",
+            "Obj(path: \"a.obj\", scale: 0.0)",
+        ];
+        let options = crate::scene::ron_options();
+        for shape in shapes {
+            let actor = options.from_str::<ActorDef>(&format!("Actor(shape: {shape})")).map_err(|e| e.code.to_string());
+            let rain: SpawnerDef = options.from_str(&format!("Rain(actors: 1, shape: {shape})")).expect("parses");
+            let spawner = rain.check().map_err(|(field, reason)| format!("actor: {field}: {reason}"));
+            assert_eq!(actor.map(|_| ()), spawner, "{shape}");
+        }
+    }
+
+    #[test]
+    fn rain_takes_any_shape_at_density_1_and_defaults_to_the_unit_cube() {
+        let options = crate::scene::ron_options();
+        let parse = |text: &str| options.from_str::<SpawnerDef>(text).expect("parses");
+        let cubes = parse("Rain(actors: 12, seed: 5)");
+        assert_eq!(cubes, parse("Rain(actors: 12, seed: 5, shape: Box(size: (1.0, 1.0, 1.0)))"));
+        assert_eq!(cubes.expand("x"), crate::scene::benchmarks::rain(12, 5));
+        let balls = parse("Rain(actors: 12, seed: 5, shape: Icosphere(radius: 0.5, subdivisions: 1))").expand("x");
+        let cubes = cubes.expand("x");
+        assert_eq!(balls.len(), cubes.len());
+        assert_eq!(balls[..5], cubes[..5], "the same container");
+        for (b, c) in balls[5..].iter().zip(&cubes[5..]) {
+            assert_eq!((b.pose, b.velocity, b.material, b.fixed), (c.pose, c.velocity, c.material, c.fixed));
+            assert_eq!(
+                (&b.shape, b.mass),
+                (&ShapeDef::Icosphere { radius: 0.5, subdivisions: 1 }, MassSpec::Density(1.0))
+            );
+        }
+        assert_eq!((cubes[5].name.as_str(), balls[5].name.as_str()), ("cube-0", "icosphere-0"));
     }
 }
