@@ -33,8 +33,12 @@ pub fn edge(_world: &mut World, ctx: &mut StepContext) {
 #[must_use]
 pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let eps = b.tolerance();
+    let reach = b.reach();
     for &[i, j] in &a.mesh.edges {
         let (v0, v1) = (a.vertices[i as usize], a.vertices[j as usize]);
+        if !reach.meets_segment(v0, v1) {
+            continue; // a segment outside b's bounds cannot cross b
+        }
         let Some(clip) = clip_segment(b, v0, v1, eps) else { continue };
         let point = v0 + 0.5 * (clip.t_in + clip.t_out) * (v1 - v0);
         let e_a = v1 - v0;

@@ -47,8 +47,9 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option
 pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let (mut sum_point, mut count) = (Vector::ZERO, 0_u32);
     let (mut sum_normal, mut sum_area) = (Vector::ZERO, 0.0);
+    let reach = b.reach();
     for (t, &centroid) in a.mesh.triangles.iter().zip(&a.centroids) {
-        if is_inside(b, centroid) {
+        if reach.contains(centroid) && is_inside(b, centroid) {
             let [p0, p1, p2] = t.map(|i| a.vertices[i as usize]);
             let area_normal = 0.5 * (p1 - p0).cross(p2 - p0);
             sum_point += centroid;

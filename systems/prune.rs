@@ -3,6 +3,7 @@
 //! of them can fire on a pair it removes (proof on `separated`).
 
 use crate::collision::contact::{Pair, PairState};
+use crate::collision::hull::{distance_bound, is_many_faced, proved_apart};
 use crate::collision::posed::Posed;
 use crate::math::{Mat3, Scalar, Vector};
 use crate::model::mesh::MeshTable;
@@ -32,25 +33,44 @@ const PARALLEL_SLACK: Scalar = 1e-9;
 /// point of either (convex combinations of vertices) is inside the other: the face, vertex
 /// and edge tests all return none.
 ///
+/// A pair with a many-faced body (`hull::is_many_faced`) is proved apart by GJK after the
+/// world axes and the line of centres, not by every face against every vertex.
+///
 /// `margin` [m] must be at least `PRUNE_MARGIN · (r_a + r_b)`; `prune` widens it to the contact
 /// margin for pairs that may rest on each other.
 #[must_use]
 pub fn separated(a: &Posed, b: &Posed, margin: Scalar) -> bool {
-    let apart_on = |axis: Vector| {
-        let (lo_a, hi_a) = extent(a, axis);
-        let (lo_b, hi_b) = extent(b, axis);
-        lo_b - hi_a > margin * axis.length() || lo_a - hi_b > margin * axis.length()
-    };
+    let apart_on = |axis: Vector| apart_along(a, b, axis, margin);
     let faces = |p: &Posed, q: &Posed| {
         p.planes.iter().any(|pl| q.vertices.iter().all(|v| pl.normal.dot(*v) - pl.offset > margin))
     };
-    let boxes_apart = (b.bounds.0 - a.bounds.1).max(a.bounds.0 - b.bounds.1).max_element() > margin;
-    if boxes_apart || faces(b, a) || faces(a, b) || apart_on(b.position - a.position) {
+    if separated_cheaply(a, b, margin) {
+        return true;
+    }
+    if is_many_faced(a) || is_many_faced(b) {
+        // Every face against every vertex is the cost the paper could not pay: GJK walks.
+        return proved_apart(a, b, margin);
+    }
+    if faces(b, a) || faces(a, b) {
         return true;
     }
     let (ea, eb) = (&a.edge_directions, &b.edge_directions);
     ea.len() * eb.len() <= MAX_EDGE_AXES
         && ea.iter().any(|&da| eb.iter().any(|&db| da.cross(db).length_squared() > 1e-12 && apart_on(da.cross(db))))
+}
+
+/// The first, cheap axes of `separated`: the world axes (bounding boxes) and the line of
+/// centres.
+fn separated_cheaply(a: &Posed, b: &Posed, margin: Scalar) -> bool {
+    let boxes_apart = (b.bounds.0 - a.bounds.1).max(a.bounds.0 - b.bounds.1).max_element() > margin;
+    boxes_apart || apart_along(a, b, b.position - a.position, margin)
+}
+
+/// True when the projections of `a` and `b` on `axis` are more than `margin` apart.
+fn apart_along(a: &Posed, b: &Posed, axis: Vector, margin: Scalar) -> bool {
+    let (lo_a, hi_a) = extent(a, axis);
+    let (lo_b, hi_b) = extent(b, axis);
+    lo_b - hi_a > margin * axis.length() || lo_a - hi_b > margin * axis.length()
 }
 
 /// A box at a pose: the oriented-box form of `separated` for two body-aligned boxes.
@@ -193,6 +213,12 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|pair| {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
         classify(pair, margin(pair), |[wide, proof]| {
+            if is_many_faced(pa) || is_many_faced(pb) {
+                // One GJK bound answers both margins.
+                let bound = distance_bound(pa, pb, wide);
+                let by_wide = bound > wide || separated_cheaply(pa, pb, wide);
+                return [by_wide, !by_wide && wide > proof && (bound > proof || separated_cheaply(pa, pb, proof))];
+            }
             let by_wide = separated(pa, pb, wide);
             [by_wide, !by_wide && wide > proof && separated(pa, pb, proof)]
         });

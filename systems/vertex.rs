@@ -26,7 +26,9 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let eps = b.tolerance();
     let (mut sum, mut count) = (Vector::ZERO, 0_u32);
     let mut deepest = (Scalar::INFINITY, Vector::ZERO);
-    for &v in &a.vertices {
+    let reach = b.reach();
+    // Only vertices within b's bounds can be inside it: on a many-faced body, a handful.
+    for &v in a.vertices.iter().filter(|&&v| reach.contains(v)) {
         let s = b.max_plane_distance(v);
         if s <= eps {
             sum += v;

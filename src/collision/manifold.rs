@@ -2,6 +2,7 @@
 //! press on each other, so a box lying on a face is held at its corners and does not rock
 //! about the single point the detection tests report.
 
+use crate::collision::hull::{contact_axis_near, is_many_faced};
 use crate::collision::posed::Posed;
 use crate::math::{Scalar, Vector};
 
@@ -191,13 +192,25 @@ pub enum Reference {
 /// A face of A is preferred to one of B, and an edge axis to a face, only when it separates
 /// the pair by more than this fraction of the margin: near-ties then keep one choice from
 /// step to step instead of flickering between parallel faces.
-const PREFER: Scalar = 0.1;
+pub(crate) const PREFER: Scalar = 0.1;
 
 /// The least-overlap axis of A and B (see `Axis`), or `None` when they are more than `reach`
 /// apart along some axis. `margin` (the contact margin, without the speculative distance a
 /// fast pair's `reach` adds) sets how much better another axis must be to replace B's face.
+/// A pair with a many-faced body searches only the features near the contact
+/// (`hull::contact_axis_near`); others try every face and edge pair (`contact_axis_all`).
 #[must_use]
 pub fn contact_axis(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
+    if is_many_faced(a) || is_many_faced(b) {
+        contact_axis_near(a, b, (margin, reach))
+    } else {
+        contact_axis_all(a, b, (margin, reach))
+    }
+}
+
+/// `contact_axis` over every face of both bodies and every pair of their edge directions.
+#[must_use]
+pub fn contact_axis_all(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
     let lowest = |p: &Posed, dir: Vector| p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
     let mut best: Option<Axis> = None;
     let mut consider = |normal: Vector, separation: Scalar, reference: Reference, prefer: Scalar| {
@@ -212,8 +225,9 @@ pub fn contact_axis(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> 
         consider(-pl.normal, lowest(b, pl.normal) - pl.offset, Reference::FaceOfA(f as u32), PREFER * margin);
     }
     let centre = a.position - b.position;
-    for &da in &a.edge_directions {
-        for &db in &b.edge_directions {
+    let (edges_a, edges_b) = (edge_directions(a), edge_directions(b));
+    for &da in edges_a.iter() {
+        for &db in edges_b.iter() {
             let cross = da.cross(db);
             if cross.length_squared() < 1e-12 {
                 continue; // parallel edges: their plane's normal is a face axis already
@@ -223,6 +237,17 @@ pub fn contact_axis(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> 
         }
     }
     best.filter(|x| x.separation <= reach)
+}
+
+/// The world directions of `p`'s feature edges: the posed ones, or for a many-faced body
+/// (which poses none) each feature edge's own.
+fn edge_directions(p: &Posed) -> std::borrow::Cow<'_, [Vector]> {
+    if p.edge_directions.is_empty() {
+        let along = |&[i, j]: &[u32; 2]| (p.vertices[j as usize] - p.vertices[i as usize]).normalize_or_zero();
+        std::borrow::Cow::Owned(p.mesh.feature_edges.iter().map(along).collect())
+    } else {
+        std::borrow::Cow::Borrowed(&p.edge_directions)
+    }
 }
 
 /// Where A and B meet along `axis` when no vertex of either lies on the other (edge across

@@ -2,5 +2,6 @@
 //! candidate pairs, and the clipped manifolds that resting contact holds.
 
 pub mod contact;
+pub mod hull;
 pub mod manifold;
 pub mod posed;

@@ -16,6 +16,49 @@ pub const INSIDE_TOLERANCE: Scalar = 1e-9;
 /// nearly as close to a side face as to the top, and rounding must not decide which.
 pub const FACE_TIE_TOLERANCE: Scalar = 1e-2;
 
+/// Slack of `Posed::reach_box` relative to the radius: a million times the inside tolerance,
+/// so the tolerance's widening at any corner sharper than a needle stays within it.
+pub const BOUNDS_SLACK: Scalar = 1e-3;
+
+/// Where a body's points can be: a box and a sphere (`Posed::reach`).
+#[derive(Clone, Copy, Debug)]
+pub struct Reach {
+    /// The box, (min, max) [m].
+    pub bounds: (Vector, Vector),
+    /// The sphere's centre [m].
+    pub centre: Vector,
+    /// The sphere's radius [m].
+    pub radius: Scalar,
+}
+
+impl Reach {
+    /// True when `p` may be a point of the body.
+    #[must_use]
+    pub fn contains(&self, p: Vector) -> bool {
+        in_box(p, self.bounds) && (p - self.centre).length_squared() <= self.radius * self.radius
+    }
+
+    /// True when segment `p`–`q` may meet the body.
+    #[must_use]
+    pub fn meets_segment(&self, p: Vector, q: Vector) -> bool {
+        let d = q - p;
+        let t = ((self.centre - p).dot(d) / d.length_squared().max(Scalar::MIN_POSITIVE)).clamp(0.0, 1.0);
+        boxes_overlap((p.min(q), p.max(q)), self.bounds) && (p + d * t - self.centre).length() <= self.radius
+    }
+}
+
+/// True when `p` lies in the box `(lo, hi)`.
+#[must_use]
+pub fn in_box(p: Vector, (lo, hi): (Vector, Vector)) -> bool {
+    p.cmpge(lo).all() && p.cmple(hi).all()
+}
+
+/// True when the boxes `a` and `b` overlap (touching counts).
+#[must_use]
+pub fn boxes_overlap(a: (Vector, Vector), b: (Vector, Vector)) -> bool {
+    a.0.cmple(b.1).all() && b.0.cmple(a.1).all()
+}
+
 /// A mesh at a pose: world-space vertices and face planes, computed once per body per step.
 #[derive(Clone, Debug)]
 pub struct Posed {
@@ -27,7 +70,7 @@ pub struct Posed {
     pub vertices: Vec<Vector>,
     /// World face planes, in the mesh's order.
     pub planes: Vec<Plane>,
-    /// World feature-edge directions, in the mesh's order.
+    /// World feature-edge directions, in the mesh's order (empty for a many-faced mesh).
     pub edge_directions: Vec<Vector>,
     /// World centroids of the triangles, in the mesh's order [m] (the face test's points:
     /// found once per body and step, not once per pair and direction).
@@ -68,13 +111,30 @@ impl Posed {
             Plane { normal, offset: p.offset + normal.dot(x) }
         }));
         self.edge_directions.clear();
-        self.edge_directions.extend(self.mesh.edge_directions.iter().map(|&d| r * d));
+        // A many-faced body's tests use its edges near the contact, not their directions.
+        if !crate::collision::hull::is_many_faced(self) {
+            self.edge_directions.extend(self.mesh.edge_directions.iter().map(|&d| r * d));
+        }
         self.centroids.clear();
         let vertices = &self.vertices;
         self.centroids.extend(self.mesh.triangles.iter().map(|t| {
             let [p0, p1, p2] = t.map(|i| vertices[i as usize]);
             (p0 + p1 + p2) / 3.0
         }));
+    }
+
+    /// This body's bounds and bounding sphere widened by `BOUNDS_SLACK` of its radius: every
+    /// point that `is_inside` accepts lies within both, so a test may skip the features of
+    /// another body outside them without changing its answer (and, iterating the rest in
+    /// order, its sums).
+    #[must_use]
+    pub fn reach(&self) -> Reach {
+        let slack = BOUNDS_SLACK * self.mesh.radius;
+        Reach {
+            bounds: (self.bounds.0 - Vector::splat(slack), self.bounds.1 + Vector::splat(slack)),
+            centre: self.position,
+            radius: self.mesh.radius + slack,
+        }
     }
 
     /// The inside tolerance for this body [m].
@@ -184,8 +244,17 @@ pub fn clip_segment(b: &Posed, v0: Vector, v1: Vector, eps: Scalar) -> Option<Cl
 /// `max_b b·n − min_a a·n`, clamped at 0. Moving A by this along `n` separates them.
 #[must_use]
 pub fn depth_along(a: &Posed, b: &Posed, n: Vector) -> Scalar {
-    let max_b = b.vertices.iter().map(|v| v.dot(n)).fold(Scalar::NEG_INFINITY, Scalar::max);
-    let min_a = a.vertices.iter().map(|v| v.dot(n)).fold(Scalar::INFINITY, Scalar::min);
+    use crate::collision::hull::{is_many_faced, lowest_vertex};
+    let max_b = if is_many_faced(b) {
+        -lowest_vertex(b, -n, 0).1
+    } else {
+        b.vertices.iter().map(|v| v.dot(n)).fold(Scalar::NEG_INFINITY, Scalar::max)
+    };
+    let min_a = if is_many_faced(a) {
+        lowest_vertex(a, n, 0).1
+    } else {
+        a.vertices.iter().map(|v| v.dot(n)).fold(Scalar::INFINITY, Scalar::min)
+    };
     (max_b - min_a).max(0.0)
 }
 

@@ -66,6 +66,24 @@ pub struct ConvexMesh {
     /// Half extents when the mesh is a box aligned with its body axes (its 8 vertices are
     /// (±x, ±y, ±z)): pairs of such boxes get the cheap oriented-box separation test.
     pub box_half_extents: Option<Vector>,
+    /// The vertices joined to vertex i by an edge:
+    /// `neighbours[neighbour_start[i]..neighbour_start[i + 1]]`. Walking them finds the vertex
+    /// farthest along a direction in about √V steps instead of V (a many-faced hull's support).
+    pub neighbours: Vec<u32>,
+    /// Where each vertex's neighbours start in `neighbours`, plus one entry for the end.
+    pub neighbour_start: Vec<u32>,
+    /// The two faces (plane indices) on either side of each feature edge, in `feature_edges`
+    /// order: their normals bound the edge's arc on the Gauss map.
+    pub feature_edge_faces: Vec<[u32; 2]>,
+    /// The faces (plane indices) around vertex i:
+    /// `vertex_faces[vertex_face_start[i]..vertex_face_start[i + 1]]`.
+    pub vertex_faces: Vec<u32>,
+    /// Where each vertex's faces start in `vertex_faces`, plus one entry for the end.
+    pub vertex_face_start: Vec<u32>,
+    /// The feature edges (indices into `feature_edges`) at vertex i, laid out as `vertex_faces`.
+    pub vertex_edges: Vec<u32>,
+    /// Where each vertex's feature edges start in `vertex_edges`, plus one entry for the end.
+    pub vertex_edge_start: Vec<u32>,
 }
 
 impl ConvexMesh {
@@ -101,6 +119,20 @@ impl ConvexMesh {
         let box_half_extents = cuboid_half_extents(&vertices);
         let edges = unique_edges(&triangles);
         let (feature_edges, edge_directions) = feature_edges(&vertices, &triangles);
+        let (neighbours, neighbour_start) = adjacency(vertices.len(), &edges);
+        let feature_edge_faces = edge_faces(&feature_edges, &triangles, &plane_of);
+        let (vertex_faces, vertex_face_start) = grouped(
+            vertices.len(),
+            triangles
+                .iter()
+                .zip(&plane_of)
+                .filter_map(|(t, p)| p.map(|p| (t, p as u32)))
+                .flat_map(|(t, p)| t.map(|v| (v, p))),
+        );
+        let (vertex_edges, vertex_edge_start) = grouped(
+            vertices.len(),
+            feature_edges.iter().enumerate().flat_map(|(e, &[i, j])| [(i, e as u32), (j, e as u32)]),
+        );
         let mesh = Self {
             vertices,
             triangles,
@@ -111,6 +143,13 @@ impl ConvexMesh {
             edge_directions,
             feature_edges,
             box_half_extents,
+            neighbours,
+            neighbour_start,
+            feature_edge_faces,
+            vertex_faces,
+            vertex_face_start,
+            vertex_edges,
+            vertex_edge_start,
             radius,
             thickness,
             volume: props.volume,
@@ -351,6 +390,63 @@ fn feature_edges(vertices: &[Vector], triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>,
         }
     }
     (edges, dirs)
+}
+
+/// `(vertex, item)` pairs as each vertex's sorted, distinct items in one flat list with start
+/// offsets.
+fn grouped(count: usize, pairs: impl Iterator<Item = (u32, u32)>) -> (Vec<u32>, Vec<u32>) {
+    let mut lists = vec![Vec::new(); count];
+    for (v, item) in pairs {
+        lists[v as usize].push(item);
+    }
+    let mut start = Vec::with_capacity(count + 1);
+    start.push(0);
+    let mut flat = Vec::new();
+    for mut list in lists {
+        list.sort_unstable();
+        list.dedup();
+        flat.extend(list);
+        start.push(flat.len() as u32);
+    }
+    (flat, start)
+}
+
+/// Each vertex's neighbours along `edges`, as flat lists with start offsets.
+fn adjacency(count: usize, edges: &[[u32; 2]]) -> (Vec<u32>, Vec<u32>) {
+    let mut lists = vec![Vec::new(); count];
+    for &[i, j] in edges {
+        lists[i as usize].push(j);
+        lists[j as usize].push(i);
+    }
+    let mut start = Vec::with_capacity(count + 1);
+    start.push(0);
+    let mut flat = Vec::with_capacity(2 * edges.len());
+    for list in lists {
+        flat.extend(list);
+        start.push(flat.len() as u32);
+    }
+    (flat, start)
+}
+
+/// The planes of the two triangles on either side of each edge.
+fn edge_faces(edges: &[[u32; 2]], triangles: &[[u32; 3]], plane_of: &[Option<usize>]) -> Vec<[u32; 2]> {
+    let mut by_edge: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for (t, tri) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3]));
+            if let Some(plane) = plane_of[t] {
+                by_edge.entry((a, b)).or_default().push(plane as u32);
+            }
+        }
+    }
+    edges
+        .iter()
+        .map(|&[a, b]| match by_edge.get(&(a, b)).map(Vec::as_slice) {
+            Some(&[f, g, ..]) => [f, g],
+            Some(&[f]) => [f, f],
+            _ => [0, 0],
+        })
+        .collect()
 }
 
 fn unique_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {

@@ -1,0 +1,415 @@
+//! Many-faced convex hulls (a ball of 1 280 faces): the paper names "high polygon counts" its
+//! limit, because its tests visit every feature of both bodies. Here the features that matter
+//! are found near the contact: the vertex lowest along a direction by walking over vertex
+//! neighbours (about √V steps, not V), the least-overlap axis among the faces and edges near
+//! the bodies' overlap only, edge pairs kept only where their arcs cross on the Gauss map
+//! (Gregorius, "The Separating Axis Test between Convex Polyhedra", GDC 2013), and separation
+//! proved by GJK (Gilbert, Johnson, Keerthi 1988) instead of every face against every vertex.
+//! Small meshes (a box) keep the exhaustive forms, which cost them less.
+
+use crate::collision::manifold::{Axis, PREFER, Reference};
+use crate::collision::posed::{BOUNDS_SLACK, Posed, in_box};
+use crate::math::{Scalar, Vector};
+
+/// The slab across the line of centres (see `contact_axis_near`) is widened by this share of
+/// the reach, so features a fast pair may bring into contact this step are among those tried.
+const SLAB_REACH: Scalar = 0.5;
+
+/// A mesh with more feature edges than this is many-faced (an icosphere of one subdivision
+/// has 120; a box 12, a 16-sided cylinder 48).
+pub const MANY_EDGES: usize = 48;
+
+/// True for a mesh whose contact tests take the paths of this module.
+#[must_use]
+pub fn is_many_faced(p: &Posed) -> bool {
+    p.mesh.feature_edges.len() > MANY_EDGES
+}
+
+/// The vertex of `p` lowest along `dir` (least `v·dir`) and that value, walking from `start`
+/// to a lower neighbour while there is one. On a convex hull a linear function has no local
+/// minimum but the global one, so the walk ends there.
+#[must_use]
+pub fn lowest_vertex(p: &Posed, dir: Vector, start: u32) -> (u32, Scalar) {
+    let m = &p.mesh;
+    let (mut at, mut value) = (start, p.vertices[start as usize].dot(dir));
+    loop {
+        let mut next = at;
+        for &j in &m.neighbours[m.neighbour_start[at as usize] as usize..m.neighbour_start[at as usize + 1] as usize] {
+            let v = p.vertices[j as usize].dot(dir);
+            if v < value {
+                (next, value) = (j, v);
+            }
+        }
+        if next == at {
+            return (at, value);
+        }
+        at = next;
+    }
+}
+
+/// The features of one body near the overlap of two: the faces with an outline vertex in
+/// the region, the feature edges with an end in it, and a vertex to start walks from. A small
+/// mesh gives all its features.
+struct Near {
+    faces: Vec<u32>,
+    edges: Vec<u32>,
+    start: u32,
+}
+
+/// Where the bodies may meet: a box, and a slab across the line of centres `d` (`lo ≤ p·d ≤
+/// hi`) from A's lowest point along `d` to B's highest, so one body's features far round the
+/// other's side are left out.
+#[derive(Clone, Copy)]
+struct Region {
+    bounds: (Vector, Vector),
+    d: Vector,
+    slab: (Scalar, Scalar),
+}
+
+/// The features of `p` near `region`: flooding from `from` (a vertex in it) over neighbours
+/// that are in it too, then the faces and feature edges at the vertices reached. A contact
+/// patch is one connected piece of a convex surface, so the flood reaches all of it while
+/// visiting only it.
+fn near(p: &Posed, region: &Region, from: u32) -> Near {
+    let m = &p.mesh;
+    if !is_many_faced(p) {
+        let faces = (0..m.planes.len() as u32).collect();
+        return Near { faces, edges: (0..m.feature_edges.len() as u32).collect(), start: from };
+    }
+    let within = |i: u32| {
+        let v = p.vertices[i as usize];
+        let s = v.dot(region.d);
+        in_box(v, region.bounds) && s >= region.slab.0 && s <= region.slab.1
+    };
+    let mut seen = vec![false; m.vertices.len()];
+    let (mut stack, mut reached) = (vec![from], Vec::new());
+    seen[from as usize] = true;
+    while let Some(i) = stack.pop() {
+        reached.push(i);
+        for &j in &m.neighbours[m.neighbour_start[i as usize] as usize..m.neighbour_start[i as usize + 1] as usize] {
+            if !seen[j as usize] && within(j) {
+                seen[j as usize] = true;
+                stack.push(j);
+            }
+        }
+    }
+    let gather = |flat: &[u32], start: &[u32]| {
+        let mut out: Vec<u32> = reached
+            .iter()
+            .flat_map(|&i| &flat[start[i as usize] as usize..start[i as usize + 1] as usize])
+            .copied()
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    };
+    Near {
+        faces: gather(&m.vertex_faces, &m.vertex_face_start),
+        edges: gather(&m.vertex_edges, &m.vertex_edge_start),
+        start: from,
+    }
+}
+
+/// True when edge arcs (a, b) and (c, d) cross on the Gauss map, the arcs given by their end
+/// normals and `c`, `d` already negated (the Minkowski difference's face test of Gregorius):
+/// only such edge pairs can give the least-overlap axis.
+fn arcs_cross(a: Vector, b: Vector, c: Vector, d: Vector) -> bool {
+    let (bxa, dxc) = (b.cross(a), d.cross(c));
+    let (cba, dba, adc, bdc) = (c.dot(bxa), d.dot(bxa), a.dot(dxc), b.dot(dxc));
+    cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0
+}
+
+/// `manifold::contact_axis` for a pair with a many-faced body: the same choice among the faces
+/// and edge pairs near the bodies' overlap (their bounds' intersection widened by `reach`).
+/// `None` when some axis parts them by more than `reach`.
+#[must_use]
+pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
+    let widen = reach.max(0.0) + BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius);
+    let lo = a.bounds.0.max(b.bounds.0) - Vector::splat(widen);
+    let hi = a.bounds.1.min(b.bounds.1) + Vector::splat(widen);
+    if lo.cmpgt(hi).any() {
+        return None; // apart along a coordinate axis by more than reach
+    }
+    let d = (a.position - b.position).normalize_or(Vector::Y);
+    let ((from_a, low_a), (from_b, low_b)) = (lowest_vertex(a, d, 0), lowest_vertex(b, -d, 0));
+    let high_b = -low_b;
+    let slack = BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius) + SLAB_REACH * reach.max(0.0);
+    let slab = (low_a.min(high_b) - slack, low_a.max(high_b) + slack);
+    let region = Region { bounds: (lo, hi), d, slab };
+    let (na, nb) = (near(a, &region, from_a), near(b, &region, from_b));
+    // Edge pairs only where the bodies meet now: an edge axis matters for edges that touch or
+    // cross, and a pair still apart by up to the reach is held along a face axis as well.
+    let tight = BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius);
+    let edges_region = Region {
+        bounds: (a.bounds.0.max(b.bounds.0) - Vector::splat(tight), a.bounds.1.min(b.bounds.1) + Vector::splat(tight)),
+        d,
+        slab: (low_a.min(high_b) - tight, low_a.max(high_b) + tight),
+    };
+    let (ea, eb) = (near(a, &edges_region, from_a).edges, near(b, &edges_region, from_b).edges);
+    if na.faces.is_empty() || nb.faces.is_empty() {
+        return crate::collision::manifold::contact_axis_all(a, b, (margin, reach));
+    }
+    let mut best: Option<Axis> = None;
+    let mut consider = |normal: Vector, separation: Scalar, reference: Reference, prefer: Scalar| {
+        if best.is_none_or(|x| separation > x.separation + prefer) {
+            best = Some(Axis { normal, separation, reference });
+        }
+    };
+    for &f in &nb.faces {
+        let pl = b.planes[f as usize];
+        consider(pl.normal, lowest_vertex(a, pl.normal, na.start).1 - pl.offset, Reference::FaceOfB(f), 0.0);
+    }
+    for &f in &na.faces {
+        let pl = a.planes[f as usize];
+        let separation = lowest_vertex(b, pl.normal, nb.start).1 - pl.offset;
+        consider(-pl.normal, separation, Reference::FaceOfA(f), PREFER * margin);
+    }
+    for &ea in &ea {
+        let ([i, j], [f, g]) = (a.mesh.feature_edges[ea as usize], a.mesh.feature_edge_faces[ea as usize]);
+        let (a0, a1) = (a.vertices[i as usize], a.vertices[j as usize]);
+        let (fa, ga) = (a.planes[f as usize].normal, a.planes[g as usize].normal);
+        for &eb in &eb {
+            let ([k, l], [h, m]) = (b.mesh.feature_edges[eb as usize], b.mesh.feature_edge_faces[eb as usize]);
+            let (hb, mb) = (b.planes[h as usize].normal, b.planes[m as usize].normal);
+            if !arcs_cross(fa, ga, -hb, -mb) {
+                continue;
+            }
+            let (b0, b1) = (b.vertices[k as usize], b.vertices[l as usize]);
+            let Some(n) = (a1 - a0).cross(b1 - b0).try_normalize() else { continue };
+            // Outward of B at its edge, so from B to A; the gap is then between the two lines.
+            let n = if n.dot(b0 - b.position) < 0.0 { -n } else { n };
+            consider(n, n.dot(a0 - b0), Reference::Edges, PREFER * margin);
+        }
+    }
+    best.filter(|x| x.separation <= reach)
+}
+
+/// Most GJK iterations before giving up on a proof (it then says "not proved apart", which
+/// only costs the tests' time).
+const GJK_ITERATIONS: usize = 64;
+
+/// True when GJK proves `a` and `b` more than `margin` apart: a direction `v` whose support
+/// points bound their distance from below by more than `margin`. `false` when they are within
+/// `margin`, overlap, or no proof came within `GJK_ITERATIONS`.
+#[must_use]
+pub fn proved_apart(a: &Posed, b: &Posed, margin: Scalar) -> bool {
+    distance_bound(a, b, margin) > margin
+}
+
+/// A lower bound on the distance between `a` and `b` [m] found by GJK, stopping as soon as it
+/// exceeds `enough` (and 0 when they touch, overlap or come within `enough`).
+#[must_use]
+pub fn distance_bound(a: &Posed, b: &Posed, enough: Scalar) -> Scalar {
+    // Support of the Minkowski difference A − B along d: A's highest minus B's lowest.
+    let (mut sa, mut sb) = (0, 0);
+    let mut support = |d: Vector| {
+        let (i, _) = lowest_vertex(a, -d, sa);
+        let (j, _) = lowest_vertex(b, d, sb);
+        (sa, sb) = (i, j);
+        a.vertices[i as usize] - b.vertices[j as usize]
+    };
+    let mut simplex: Vec<Vector> = Vec::with_capacity(4);
+    let mut v = a.position - b.position;
+    let mut bound: Scalar = 0.0;
+    if v == Vector::ZERO {
+        return bound;
+    }
+    for _ in 0..GJK_ITERATIONS {
+        let w = support(-v);
+        let length = v.length();
+        // Every point of A − B lies at least v·w/|v| from the origin along v's direction.
+        bound = bound.max(v.dot(w) / length);
+        if bound > enough {
+            return bound;
+        }
+        if simplex.iter().any(|&p| (p - w).length_squared() <= 1e-24 * length * length) {
+            return bound; // no progress: as close as GJK gets (or round-off)
+        }
+        simplex.push(w);
+        match closest_to_origin(&mut simplex) {
+            Some(closest) if closest.length() > enough => v = closest,
+            _ => return bound, // within `enough` (or overlapping)
+        }
+    }
+    bound
+}
+
+/// The point of the hull of `s` (1 to 4 points) closest to the origin; `s` keeps only the
+/// points that point is a combination of. `None` when the origin is inside (or on) the hull.
+fn closest_to_origin(s: &mut Vec<Vector>) -> Option<Vector> {
+    match s.len() {
+        1 => Some(s[0]),
+        2 => Some(closest_on_segment(s)),
+        3 => Some(closest_on_triangle(s)),
+        _ => closest_on_tetrahedron(s),
+    }
+}
+
+fn closest_on_segment(s: &mut Vec<Vector>) -> Vector {
+    let (p, q) = (s[0], s[1]);
+    let d = q - p;
+    let t = -p.dot(d) / d.length_squared().max(Scalar::MIN_POSITIVE);
+    if t <= 0.0 {
+        s.truncate(1);
+        p
+    } else if t >= 1.0 {
+        s.remove(0);
+        q
+    } else {
+        p + d * t
+    }
+}
+
+/// Closest point of triangle `s` to the origin by its Voronoi regions (Ericson, "Real-Time
+/// Collision Detection", §5.1.5).
+fn closest_on_triangle(s: &mut Vec<Vector>) -> Vector {
+    let (a, b, c) = (s[0], s[1], s[2]);
+    let (ab, ac, ap) = (b - a, c - a, -a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        *s = vec![a];
+        return a;
+    }
+    let bp = -b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        *s = vec![b];
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        *s = vec![a, b];
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = -c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        *s = vec![c];
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        *s = vec![a, c];
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        *s = vec![b, c];
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+/// Closest point of tetrahedron `s` to the origin: the best of the faces the origin lies
+/// outside of, or `None` when it is outside none (inside the tetrahedron).
+fn closest_on_tetrahedron(s: &mut Vec<Vector>) -> Option<Vector> {
+    let faces = [[0, 1, 2, 3], [0, 1, 3, 2], [0, 2, 3, 1], [1, 2, 3, 0]];
+    let mut best: Option<(Scalar, Vector, Vec<Vector>)> = None;
+    for [i, j, k, opposite] in faces {
+        let (p, q, r) = (s[i], s[j], s[k]);
+        let n = (q - p).cross(r - p);
+        // The origin is beyond this face when it and the opposite vertex are on either side.
+        let (origin_side, other_side) = (n.dot(-p), n.dot(s[opposite] - p));
+        if origin_side * other_side >= 0.0 {
+            continue;
+        }
+        let mut face = vec![p, q, r];
+        let point = closest_on_triangle(&mut face);
+        if best.as_ref().is_none_or(|b| point.length_squared() < b.0) {
+            best = Some((point.length_squared(), point, face));
+        }
+    }
+    let (_, point, face) = best?;
+    *s = face;
+    Some(point)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::manifold::contact_axis_all;
+    use crate::math::Quat;
+    use crate::model::components::Pose;
+    use crate::model::mesh::ConvexMesh;
+    use crate::model::shapes::icosphere_raw;
+    use crate::rng::SplitMix64;
+    use std::sync::Arc;
+
+    fn ball(subdivisions: u32) -> Arc<ConvexMesh> {
+        let (v, t) = icosphere_raw(0.5, subdivisions);
+        Arc::new(ConvexMesh::new(v, t).expect("an icosphere is valid").0)
+    }
+
+    fn random_turn(rng: &mut SplitMix64) -> Quat {
+        let axis = Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize_or(Vector::Y);
+        Quat::from_axis_angle(axis, 6.3 * rng.unit())
+    }
+
+    #[test]
+    fn the_walk_finds_the_lowest_vertex_from_anywhere() {
+        let mesh = ball(3);
+        let mut rng = SplitMix64::new(7);
+        for _ in 0..200 {
+            let p = Posed::new(mesh.clone(), &Pose { position: Vector::ZERO, orientation: random_turn(&mut rng) });
+            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5);
+            let start = (rng.unit() * 642.0) as u32 % 642;
+            let lowest = p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
+            assert_eq!(lowest_vertex(&p, dir, start).1, lowest);
+        }
+    }
+
+    #[test]
+    fn the_near_axis_is_the_exhaustive_one_for_touching_balls_and_a_ball_on_a_box() {
+        let (small, box_mesh) = (ball(1), Arc::new(ConvexMesh::cuboid(Vector::new(3.0, 1.0, 3.0))));
+        let mut rng = SplitMix64::new(11);
+        let (margin, reach) = (0.02, 0.05);
+        for case in 0..200 {
+            let turn = random_turn(&mut rng);
+            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.2, rng.unit() - 0.5).normalize();
+            let (other, distance) = if case % 2 == 0 { (small.clone(), 0.95) } else { (box_mesh.clone(), 0.95) };
+            // Centres a little under or over touching, along a random direction.
+            let d = distance + 0.06 * (rng.unit() - 0.5);
+            let a = Posed::new(small.clone(), &Pose { position: dir * d, orientation: turn });
+            let b = Posed::new(other, &Pose { position: Vector::ZERO, orientation: random_turn(&mut rng) });
+            let (near, all) = (contact_axis_near(&a, &b, (margin, reach)), contact_axis_all(&a, &b, (margin, reach)));
+            match (near, all) {
+                (Some(n), Some(x)) => {
+                    // Both are true separations along their normals, and the near search
+                    // misses no better axis (beyond the hysteresis both apply).
+                    let lowest =
+                        |p: &Posed, d: Vector| p.vertices.iter().map(|v| v.dot(d)).fold(Scalar::INFINITY, Scalar::min);
+                    let true_gap = lowest(&a, n.normal) + lowest(&b, -n.normal);
+                    assert!((true_gap - n.separation).abs() < 1e-12, "case {case}: {n:?} really {true_gap}");
+                    assert!(n.separation >= x.separation - PREFER * margin - 1e-12, "case {case}: {n:?} vs {x:?}");
+                    assert!(x.separation >= n.separation - PREFER * margin - 1e-12, "case {case}: {n:?} vs {x:?}");
+                }
+                (None, None) => {}
+                other => panic!("case {case}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn gjk_proves_apart_exactly_the_pairs_farther_than_the_margin() {
+        let mesh = ball(1);
+        let mut rng = SplitMix64::new(5);
+        for case in 0..200 {
+            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize();
+            let a = Posed::new(
+                mesh.clone(),
+                &Pose { position: dir * (0.9 + 0.3 * rng.unit()), orientation: random_turn(&mut rng) },
+            );
+            let b = Posed::new(mesh.clone(), &Pose { position: Vector::ZERO, orientation: random_turn(&mut rng) });
+            // The true gap of two convex hulls is the largest separation over the SAT axes.
+            let gap = contact_axis_all(&a, &b, (0.0, Scalar::INFINITY)).map_or(Scalar::INFINITY, |x| x.separation);
+            let margin = 0.01;
+            if gap > margin + 1e-9 {
+                assert!(proved_apart(&a, &b, margin), "case {case}: gap {gap} not proved");
+            }
+            if gap <= margin {
+                assert!(!proved_apart(&a, &b, margin), "case {case}: gap {gap} 'proved' beyond {margin}");
+            }
+        }
+    }
+}
