@@ -2,6 +2,7 @@
 //! (docs/physics.md §1.5, erratum E4).
 
 use crate::collision::contact::{Contact, Feature};
+use crate::collision::hull::{beyond_near_face, is_many_faced};
 use crate::collision::posed::{Posed, clip_segment, depth_along};
 use crate::math::Scalar;
 use crate::sim::context::StepContext;
@@ -34,10 +35,11 @@ pub fn edge(_world: &mut World, ctx: &mut StepContext) {
 pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let eps = b.tolerance();
     let reach = b.reach();
+    let (many, mut hint) = (is_many_faced(b), 0);
     for &[i, j] in &a.mesh.edges {
         let (v0, v1) = (a.vertices[i as usize], a.vertices[j as usize]);
-        if !reach.meets_segment(v0, v1) {
-            continue; // a segment outside b's bounds cannot cross b
+        if !reach.meets_segment(v0, v1) || (many && beyond_near_face(b, &[v0, v1], eps, &mut hint)) {
+            continue; // a segment outside b's bounds, or beyond one of its faces, cannot cross b
         }
         let Some(clip) = clip_segment(b, v0, v1, eps) else { continue };
         let point = v0 + 0.5 * (clip.t_in + clip.t_out) * (v1 - v0);

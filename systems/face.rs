@@ -2,6 +2,7 @@
 //! (docs/physics.md §1.3, errata E2 and E3).
 
 use crate::collision::contact::{Contact, Feature, PairState};
+use crate::collision::hull::{is_many_faced, outside_near_face};
 use crate::collision::posed::{Posed, depth_along, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
@@ -48,8 +49,12 @@ pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let (mut sum_point, mut count) = (Vector::ZERO, 0_u32);
     let (mut sum_normal, mut sum_area) = (Vector::ZERO, 0.0);
     let reach = b.reach();
+    let (many, mut hint) = (is_many_faced(b), 0);
     for (t, &centroid) in a.mesh.triangles.iter().zip(&a.centroids) {
-        if reach.contains(centroid) && is_inside(b, centroid) {
+        if reach.contains(centroid)
+            && !(many && outside_near_face(b, centroid, b.tolerance(), &mut hint))
+            && is_inside(b, centroid)
+        {
             let [p0, p1, p2] = t.map(|i| a.vertices[i as usize]);
             let area_normal = 0.5 * (p1 - p0).cross(p2 - p0);
             sum_point += centroid;

@@ -67,8 +67,8 @@ pub fn integrate(_world: &mut World, ctx: &mut StepContext) {
         *inv_w = rotate_tensor(*q, props.3[i]);
         *rotation = Mat3::from_quat(*q);
     });
-    for i in 0..ctx.bodies.len() {
-        ctx.mark_moved(i);
+    for i in (0..ctx.bodies.len()).filter(|&i| ctx.bodies.inv_mass[i] != 0.0) {
+        ctx.posed.mark_moved(i); // fixed (and sleeping) bodies keep their posed meshes
     }
 }
 

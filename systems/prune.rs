@@ -3,7 +3,7 @@
 //! of them can fire on a pair it removes (proof on `separated`).
 
 use crate::collision::contact::{Pair, PairState};
-use crate::collision::hull::{distance_bound, is_many_faced, proved_apart};
+use crate::collision::hull::{distance_bound, is_many_faced, lowest_vertex_seeded, proved_apart};
 use crate::collision::posed::Posed;
 use crate::math::{Mat3, Scalar, Vector};
 use crate::model::mesh::MeshTable;
@@ -62,8 +62,13 @@ pub fn separated(a: &Posed, b: &Posed, margin: Scalar) -> bool {
 /// The first, cheap axes of `separated`: the world axes (bounding boxes) and the line of
 /// centres.
 fn separated_cheaply(a: &Posed, b: &Posed, margin: Scalar) -> bool {
-    let boxes_apart = (b.bounds.0 - a.bounds.1).max(a.bounds.0 - b.bounds.1).max_element() > margin;
-    boxes_apart || apart_along(a, b, b.position - a.position, margin)
+    bounds_gap(a, b) > margin || apart_along(a, b, b.position - a.position, margin)
+}
+
+/// How far apart the bodies' bounding boxes are along the farthest world axis [m] (negative
+/// when they overlap).
+fn bounds_gap(a: &Posed, b: &Posed) -> Scalar {
+    (b.bounds.0 - a.bounds.1).max(a.bounds.0 - b.bounds.1).max_element()
 }
 
 /// True when the projections of `a` and `b` on `axis` are more than `margin` apart.
@@ -169,6 +174,9 @@ fn classify(pair: &mut Pair, (wide, proof): (Scalar, Scalar), apart: impl Fn([Sc
 
 /// The interval of `p`'s vertices projected on `axis`.
 fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
+    if is_many_faced(p) {
+        return (lowest_vertex_seeded(p, axis).1, -lowest_vertex_seeded(p, -axis).1);
+    }
     p.vertices.iter().fold((Scalar::INFINITY, Scalar::NEG_INFINITY), |(lo, hi), v| {
         let s = v.dot(axis);
         (lo.min(s), hi.max(s))
@@ -215,9 +223,9 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         classify(pair, margin(pair), |[wide, proof]| {
             if is_many_faced(pa) || is_many_faced(pb) {
                 // One GJK bound answers both margins.
-                let bound = distance_bound(pa, pb, wide);
-                let by_wide = bound > wide || separated_cheaply(pa, pb, wide);
-                return [by_wide, !by_wide && wide > proof && (bound > proof || separated_cheaply(pa, pb, proof))];
+                // (Its first direction is the line of centres, which `separated` tries.)
+                let bound = distance_bound(pa, pb, wide).max(bounds_gap(pa, pb));
+                return [bound > wide, bound <= wide && wide > proof && bound > proof];
             }
             let by_wide = separated(pa, pb, wide);
             [by_wide, !by_wide && wide > proof && separated(pa, pb, proof)]

@@ -47,6 +47,37 @@ pub fn lowest_vertex(p: &Posed, dir: Vector, start: u32) -> (u32, Scalar) {
     }
 }
 
+/// A quick proof that `p` lies beyond `b`'s inside tolerance `eps`: a face around the vertex of
+/// `b` farthest towards `p` has `p` more than `eps` outside its plane. `false` proves nothing
+/// (the full test decides). `hint` is where the walk starts, and is left at its end: nearby
+/// points share most of their walks.
+#[must_use]
+pub fn outside_near_face(b: &Posed, p: Vector, eps: Scalar, hint: &mut u32) -> bool {
+    beyond_near_face(b, &[p], eps, hint)
+}
+
+/// As `outside_near_face` for every point of `points` beyond one and the same face plane: then
+/// their segment (or hull) lies outside `b` too.
+#[must_use]
+pub fn beyond_near_face(b: &Posed, points: &[Vector], eps: Scalar, hint: &mut u32) -> bool {
+    let towards = points.iter().sum::<Vector>() / points.len().max(1) as Scalar - b.position;
+    let (top, _) = lowest_vertex(b, -towards, *hint);
+    *hint = top;
+    let m = &b.mesh;
+    m.vertex_faces[m.vertex_face_start[top as usize] as usize..m.vertex_face_start[top as usize + 1] as usize]
+        .iter()
+        .map(|&f| b.planes[f as usize])
+        .any(|pl| points.iter().all(|&p| pl.normal.dot(p) - pl.offset > eps))
+}
+
+/// `lowest_vertex` started from the best of the mesh's seed vertices.
+#[must_use]
+pub fn lowest_vertex_seeded(p: &Posed, dir: Vector) -> (u32, Scalar) {
+    let value = |i: &&u32| p.vertices[**i as usize].dot(dir);
+    let start = p.mesh.seeds.iter().min_by(|i, j| value(i).total_cmp(&value(j))).copied().unwrap_or(0);
+    lowest_vertex(p, dir, start)
+}
+
 /// The features of one body near the overlap of two: the faces with an outline vertex in
 /// the region, the feature edges with an end in it, and a vertex to start walks from. A small
 /// mesh gives all its features.
@@ -131,7 +162,7 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
         return None; // apart along a coordinate axis by more than reach
     }
     let d = (a.position - b.position).normalize_or(Vector::Y);
-    let ((from_a, low_a), (from_b, low_b)) = (lowest_vertex(a, d, 0), lowest_vertex(b, -d, 0));
+    let ((from_a, low_a), (from_b, low_b)) = (lowest_vertex_seeded(a, d), lowest_vertex_seeded(b, -d));
     let high_b = -low_b;
     let slack = BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius) + SLAB_REACH * reach.max(0.0);
     let slab = (low_a.min(high_b) - slack, low_a.max(high_b) + slack);
@@ -201,7 +232,8 @@ pub fn proved_apart(a: &Posed, b: &Posed, margin: Scalar) -> bool {
 #[must_use]
 pub fn distance_bound(a: &Posed, b: &Posed, enough: Scalar) -> Scalar {
     // Support of the Minkowski difference A − B along d: A's highest minus B's lowest.
-    let (mut sa, mut sb) = (0, 0);
+    let centre = b.position - a.position;
+    let (mut sa, mut sb) = (lowest_vertex_seeded(a, -centre).0, lowest_vertex_seeded(b, centre).0);
     let mut support = |d: Vector| {
         let (i, _) = lowest_vertex(a, -d, sa);
         let (j, _) = lowest_vertex(b, d, sb);
@@ -388,6 +420,26 @@ mod tests {
                 other => panic!("case {case}: {other:?}"),
             }
         }
+    }
+
+    #[test]
+    fn a_near_face_proves_outside_only_points_that_are_outside() {
+        let b = Posed::new(ball(3), &Pose { position: Vector::new(0.1, 0.2, 0.3), orientation: Quat::IDENTITY });
+        let mut rng = SplitMix64::new(3);
+        let (mut proved, mut hint) = (0, 0);
+        for _ in 0..2000 {
+            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize();
+            let p = b.position + dir * (0.47 + 0.06 * rng.unit());
+            let inside = crate::collision::posed::is_inside(&b, p);
+            if outside_near_face(&b, p, b.tolerance(), &mut hint) {
+                assert!(!inside, "{p} is inside");
+                proved += 1;
+            } else {
+                // Points this close to the surface are decided by their own face.
+                assert!(inside || b.max_plane_distance(p) <= 1e-3, "{p} missed");
+            }
+        }
+        assert!(proved > 1000, "most points outside are proved so: {proved}");
     }
 
     #[test]

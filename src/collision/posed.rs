@@ -66,6 +66,8 @@ pub struct Posed {
     pub mesh: Arc<ConvexMesh>,
     /// World centre of mass [m].
     pub position: Vector,
+    /// Body → world rotation it was posed at.
+    pub orientation: crate::math::Quat,
     /// World vertices, in the mesh's order [m].
     pub vertices: Vec<Vector>,
     /// World face planes, in the mesh's order.
@@ -86,6 +88,7 @@ impl Posed {
         let mut posed = Self {
             mesh,
             position: Vector::ZERO,
+            orientation: crate::math::Quat::IDENTITY,
             vertices: Vec::new(),
             planes: Vec::new(),
             edge_directions: Vec::new(),
@@ -100,7 +103,7 @@ impl Posed {
     pub fn update(&mut self, pose: &Pose) {
         let r = crate::math::Mat3::from_quat(pose.orientation);
         let x = pose.position;
-        self.position = x;
+        (self.position, self.orientation) = (x, pose.orientation);
         self.vertices.clear();
         self.vertices.extend(self.mesh.vertices.iter().map(|&v| x + r * v));
         self.bounds =
@@ -244,14 +247,14 @@ pub fn clip_segment(b: &Posed, v0: Vector, v1: Vector, eps: Scalar) -> Option<Cl
 /// `max_b b·n − min_a a·n`, clamped at 0. Moving A by this along `n` separates them.
 #[must_use]
 pub fn depth_along(a: &Posed, b: &Posed, n: Vector) -> Scalar {
-    use crate::collision::hull::{is_many_faced, lowest_vertex};
+    use crate::collision::hull::{is_many_faced, lowest_vertex_seeded};
     let max_b = if is_many_faced(b) {
-        -lowest_vertex(b, -n, 0).1
+        -lowest_vertex_seeded(b, -n).1
     } else {
         b.vertices.iter().map(|v| v.dot(n)).fold(Scalar::NEG_INFINITY, Scalar::max)
     };
     let min_a = if is_many_faced(a) {
-        lowest_vertex(a, n, 0).1
+        lowest_vertex_seeded(a, n).1
     } else {
         a.vertices.iter().map(|v| v.dot(n)).fold(Scalar::INFINITY, Scalar::min)
     };

@@ -84,6 +84,10 @@ pub struct ConvexMesh {
     pub vertex_edges: Vec<u32>,
     /// Where each vertex's feature edges start in `vertex_edges`, plus one entry for the end.
     pub vertex_edge_start: Vec<u32>,
+    /// The vertices farthest along each of 26 directions (the faces, edges and corners of a
+    /// cube), each once: a walk for the vertex lowest along any direction starts at the best
+    /// of them and has only a few steps left.
+    pub seeds: Vec<u32>,
 }
 
 impl ConvexMesh {
@@ -133,7 +137,9 @@ impl ConvexMesh {
             vertices.len(),
             feature_edges.iter().enumerate().flat_map(|(e, &[i, j])| [(i, e as u32), (j, e as u32)]),
         );
+        let seeds = seeds(&vertices);
         let mesh = Self {
+            seeds,
             vertices,
             triangles,
             edges,
@@ -390,6 +396,26 @@ fn feature_edges(vertices: &[Vector], triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>,
         }
     }
     (edges, dirs)
+}
+
+/// The vertex farthest along each of the 26 directions with components in {−1, 0, 1}.
+fn seeds(vertices: &[Vector]) -> Vec<u32> {
+    let mut out: Vec<u32> = Vec::new();
+    for x in -1..=1 {
+        for y in -1..=1 {
+            for z in -1..=1 {
+                let d = Vector::new(f64::from(x), f64::from(y), f64::from(z));
+                if d == Vector::ZERO {
+                    continue;
+                }
+                let best = (0..vertices.len()).max_by(|&i, &j| vertices[i].dot(d).total_cmp(&vertices[j].dot(d)));
+                if let Some(i) = best.map(|i| i as u32).filter(|i| !out.contains(i)) {
+                    out.push(i);
+                }
+            }
+        }
+    }
+    out
 }
 
 /// `(vertex, item)` pairs as each vertex's sorted, distinct items in one flat list with start

@@ -202,7 +202,12 @@ impl StepContext {
         if self.posed.entries.len() != self.bodies.len() || before != self.bodies.len() {
             self.posed.reset(&self.meshes, &self.bodies);
         }
-        self.posed.fresh.iter_mut().for_each(|f| *f = false);
+        // A body posed last step at the very pose it has now (a fixed one, or one at rest to
+        // the bit) keeps its posed mesh: posing is a function of the pose alone.
+        let (posed, bodies) = (&mut self.posed, &self.bodies);
+        for (i, (entry, fresh)) in posed.entries.iter().zip(posed.fresh.iter_mut()).enumerate() {
+            *fresh = *fresh && entry.position == bodies.position[i] && entry.orientation == bodies.orientation[i];
+        }
     }
 
     /// Marks body `i` as moved, so the next `pose_candidates` poses it again.
