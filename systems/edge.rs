@@ -46,7 +46,7 @@ pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
         let e_a = v1 - v0;
         let crossing = match (clip.plane_in, clip.plane_out) {
             (Some(fi), Some(fo)) => {
-                let (n_in, n_out) = (b.planes[fi].normal, b.planes[fo].normal);
+                let (n_in, n_out) = (b.plane(fi).normal, b.plane(fo).normal);
                 let e_b = n_in.cross(n_out);
                 let n = e_a.cross(e_b);
                 // The guard of §1.5: a positive combination of the two outward normals.

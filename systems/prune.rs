@@ -42,7 +42,7 @@ const PARALLEL_SLACK: Scalar = 1e-9;
 pub fn separated(a: &Posed, b: &Posed, margin: Scalar) -> bool {
     let apart_on = |axis: Vector| apart_along(a, b, axis, margin);
     let faces = |p: &Posed, q: &Posed| {
-        p.planes.iter().any(|pl| q.vertices.iter().all(|v| pl.normal.dot(*v) - pl.offset > margin))
+        p.all_planes().any(|pl| q.vertices.iter().all(|v| pl.normal.dot(*v) - pl.offset > margin))
     };
     if separated_cheaply(a, b, margin) {
         return true;

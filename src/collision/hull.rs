@@ -66,7 +66,7 @@ pub fn beyond_near_face(b: &Posed, points: &[Vector], eps: Scalar, hint: &mut u3
     let m = &b.mesh;
     m.vertex_faces[m.vertex_face_start[top as usize] as usize..m.vertex_face_start[top as usize + 1] as usize]
         .iter()
-        .map(|&f| b.planes[f as usize])
+        .map(|&f| b.plane(f as usize))
         .any(|pl| points.iter().all(|&p| pl.normal.dot(p) - pl.offset > eps))
 }
 
@@ -187,21 +187,21 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
         }
     };
     for &f in &nb.faces {
-        let pl = b.planes[f as usize];
+        let pl = b.plane(f as usize);
         consider(pl.normal, lowest_vertex(a, pl.normal, na.start).1 - pl.offset, Reference::FaceOfB(f), 0.0);
     }
     for &f in &na.faces {
-        let pl = a.planes[f as usize];
+        let pl = a.plane(f as usize);
         let separation = lowest_vertex(b, pl.normal, nb.start).1 - pl.offset;
         consider(-pl.normal, separation, Reference::FaceOfA(f), PREFER * margin);
     }
     for &ea in &ea {
         let ([i, j], [f, g]) = (a.mesh.feature_edges[ea as usize], a.mesh.feature_edge_faces[ea as usize]);
         let (a0, a1) = (a.vertices[i as usize], a.vertices[j as usize]);
-        let (fa, ga) = (a.planes[f as usize].normal, a.planes[g as usize].normal);
+        let (fa, ga) = (a.plane(f as usize).normal, a.plane(g as usize).normal);
         for &eb in &eb {
             let ([k, l], [h, m]) = (b.mesh.feature_edges[eb as usize], b.mesh.feature_edge_faces[eb as usize]);
-            let (hb, mb) = (b.planes[h as usize].normal, b.planes[m as usize].normal);
+            let (hb, mb) = (b.plane(h as usize).normal, b.plane(m as usize).normal);
             if !arcs_cross(fa, ga, -hb, -mb) {
                 continue;
             }

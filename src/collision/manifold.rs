@@ -63,7 +63,7 @@ pub fn manifold(a: &Posed, b: &Posed, axis: &Axis, reach: Scalar, scratch: &mut 
             // a wall's edge, whose far corners make the wall's face axis read deeper): clipped
             // against that face it gets a point at each end of the edge, not one to seesaw on.
             let best = |p: &Posed, n: Vector| {
-                (0..p.planes.len()).map(|f| (p.planes[f].normal.dot(n), f)).max_by(|x, y| x.0.total_cmp(&y.0))
+                p.all_planes().enumerate().map(|(f, pl)| (pl.normal.dot(n), f)).max_by(|x, y| x.0.total_cmp(&y.0))
             };
             match (best(b, axis.normal), best(a, -axis.normal)) {
                 (Some((cb, fb)), Some((ca, _))) if cb >= ca && cb >= EDGE_ON_FACE => (b, a, fb),
@@ -72,11 +72,9 @@ pub fn manifold(a: &Posed, b: &Posed, axis: &Axis, reach: Scalar, scratch: &mut 
             }
         }
     };
-    let plane = reference.planes[face];
+    let plane = reference.plane(face);
     let n = plane.normal;
-    let Some(incident_face) = (0..incident.planes.len())
-        .min_by(|&x, &y| incident.planes[x].normal.dot(n).total_cmp(&incident.planes[y].normal.dot(n)))
-    else {
+    let Some(incident_face) = incident_face(incident, n) else {
         return Manifold::default();
     };
     let ClipScratch { polygon, clipped, points } = scratch;
@@ -101,6 +99,25 @@ pub fn manifold(a: &Posed, b: &Posed, axis: &Axis, reach: Scalar, scratch: &mut 
         }
     }
     reduce(points, SAME_POINT * a.mesh.radius.min(b.mesh.radius))
+}
+
+/// The incident body's face most opposed to `n`: among all faces, or for a many-faced body
+/// among those around its vertex lowest along `n` (the most opposed face is one of them
+/// unless the vertex's faces are very uneven).
+fn incident_face(incident: &Posed, n: Vector) -> Option<usize> {
+    let opposed = |x: &(usize, Scalar), y: &(usize, Scalar)| x.1.total_cmp(&y.1);
+    if is_many_faced(incident) {
+        let m = &incident.mesh;
+        let (v, _) = crate::collision::hull::lowest_vertex_seeded(incident, n);
+        let around =
+            &m.vertex_faces[m.vertex_face_start[v as usize] as usize..m.vertex_face_start[v as usize + 1] as usize];
+        return around
+            .iter()
+            .map(|&f| (f as usize, incident.plane(f as usize).normal.dot(n)))
+            .min_by(opposed)
+            .map(|x| x.0);
+    }
+    incident.all_planes().enumerate().map(|(f, pl)| (f, pl.normal.dot(n))).min_by(opposed).map(|x| x.0)
 }
 
 /// Face `f`'s outline on the body (vertex indices, counter-clockwise seen from outside).
@@ -218,10 +235,10 @@ pub fn contact_axis_all(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar))
             best = Some(Axis { normal, separation, reference });
         }
     };
-    for (f, pl) in b.planes.iter().enumerate() {
+    for (f, pl) in b.all_planes().enumerate() {
         consider(pl.normal, lowest(a, pl.normal) - pl.offset, Reference::FaceOfB(f as u32), 0.0);
     }
-    for (f, pl) in a.planes.iter().enumerate() {
+    for (f, pl) in a.all_planes().enumerate() {
         consider(-pl.normal, lowest(b, pl.normal) - pl.offset, Reference::FaceOfA(f as u32), PREFER * margin);
     }
     let centre = a.position - b.position;

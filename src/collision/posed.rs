@@ -68,10 +68,14 @@ pub struct Posed {
     pub position: Vector,
     /// Body → world rotation it was posed at.
     pub orientation: crate::math::Quat,
+    /// The same rotation as a matrix.
+    pub rotation: crate::math::Mat3,
     /// World vertices, in the mesh's order [m].
     pub vertices: Vec<Vector>,
-    /// World face planes, in the mesh's order.
-    pub planes: Vec<Plane>,
+    /// World face planes, in the mesh's order (`Posed::all_planes`): turned when posed for a
+    /// small mesh; for a many-faced one, whose tests mostly visit a few planes near the contact
+    /// (`Posed::plane` turns one), only when a test first needs them all in a step.
+    planes: std::sync::OnceLock<Vec<Plane>>,
     /// World feature-edge directions, in the mesh's order (empty for a many-faced mesh).
     pub edge_directions: Vec<Vector>,
     /// World centroids of the triangles, in the mesh's order [m] (the face test's points:
@@ -89,8 +93,9 @@ impl Posed {
             mesh,
             position: Vector::ZERO,
             orientation: crate::math::Quat::IDENTITY,
+            rotation: crate::math::Mat3::IDENTITY,
             vertices: Vec::new(),
-            planes: Vec::new(),
+            planes: std::sync::OnceLock::new(),
             edge_directions: Vec::new(),
             centroids: Vec::new(),
             bounds: (Vector::ZERO, Vector::ZERO),
@@ -103,19 +108,19 @@ impl Posed {
     pub fn update(&mut self, pose: &Pose) {
         let r = crate::math::Mat3::from_quat(pose.orientation);
         let x = pose.position;
-        (self.position, self.orientation) = (x, pose.orientation);
+        (self.position, self.orientation, self.rotation) = (x, pose.orientation, r);
+        let many = crate::collision::hull::is_many_faced(self);
         self.vertices.clear();
         self.vertices.extend(self.mesh.vertices.iter().map(|&v| x + r * v));
         self.bounds =
             self.vertices.iter().fold((Vector::INFINITY, Vector::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-        self.planes.clear();
-        self.planes.extend(self.mesh.planes.iter().map(|p| {
-            let normal = r * p.normal;
-            Plane { normal, offset: p.offset + normal.dot(x) }
-        }));
+        let mut planes = self.planes.take().unwrap_or_default();
+        planes.clear();
         self.edge_directions.clear();
-        // A many-faced body's tests use its edges near the contact, not their directions.
-        if !crate::collision::hull::is_many_faced(self) {
+        // A many-faced body's tests use its planes and edges near the contact only.
+        if !many {
+            planes.extend(self.mesh.planes.iter().map(|&p| turned(p, r, x)));
+            self.planes.set(planes).expect("taken just above");
             self.edge_directions.extend(self.mesh.edge_directions.iter().map(|&d| r * d));
         }
         self.centroids.clear();
@@ -124,6 +129,29 @@ impl Posed {
             let [p0, p1, p2] = t.map(|i| vertices[i as usize]);
             (p0 + p1 + p2) / 3.0
         }));
+    }
+
+    /// World plane `f`.
+    #[must_use]
+    pub fn plane(&self, f: usize) -> Plane {
+        match self.planes.get() {
+            Some(planes) => planes[f],
+            None => turned(self.mesh.planes[f], self.rotation, self.position),
+        }
+    }
+
+    /// How many face planes.
+    #[must_use]
+    pub fn plane_count(&self) -> usize {
+        self.mesh.planes.len()
+    }
+
+    /// Every world plane, in order.
+    pub fn all_planes(&self) -> impl Iterator<Item = Plane> + '_ {
+        self.planes
+            .get_or_init(|| self.mesh.planes.iter().map(|&p| turned(p, self.rotation, self.position)).collect())
+            .iter()
+            .copied()
     }
 
     /// This body's bounds and bounding sphere widened by `BOUNDS_SLACK` of its radius: every
@@ -157,7 +185,7 @@ impl Posed {
         let tie = FACE_TIE_TOLERANCE * self.mesh.radius;
         let toward = other.position - self.position;
         let mut chosen = (Scalar::INFINITY, Scalar::NEG_INFINITY, Vector::ZERO);
-        for pl in self.planes.iter().filter(|pl| pl.normal.dot(p) - pl.offset >= best - tie) {
+        for pl in self.all_planes().filter(|pl| pl.normal.dot(p) - pl.offset >= best - tie) {
             let (depth, facing) = (depth_along(other, self, pl.normal), pl.normal.dot(toward));
             if depth < chosen.0 || (depth == chosen.0 && facing > chosen.1) {
                 chosen = (depth, facing, pl.normal);
@@ -170,8 +198,14 @@ impl Posed {
     /// tolerance, and minus it is the depth below the closest face (docs/physics.md §1.1).
     #[must_use]
     pub fn max_plane_distance(&self, p: Vector) -> Scalar {
-        self.planes.iter().map(|pl| pl.normal.dot(p) - pl.offset).fold(Scalar::NEG_INFINITY, Scalar::max)
+        self.all_planes().map(|pl| pl.normal.dot(p) - pl.offset).fold(Scalar::NEG_INFINITY, Scalar::max)
     }
+}
+
+/// Body-frame plane `p` in the world, for a body turned by `r` with its centre at `x`.
+fn turned(p: Plane, r: crate::math::Mat3, x: Vector) -> Plane {
+    let normal = r * p.normal;
+    Plane { normal, offset: p.offset + normal.dot(x) }
 }
 
 /// Point-in-mesh for convex `b` (docs/physics.md §1.1, erratum E2): inside iff
@@ -188,7 +222,7 @@ impl Posed {
 #[must_use]
 pub fn is_inside(b: &Posed, p: Vector) -> bool {
     let eps = b.tolerance();
-    b.planes.iter().all(|pl| pl.normal.dot(p) - pl.offset <= eps)
+    b.all_planes().all(|pl| pl.normal.dot(p) - pl.offset <= eps)
 }
 
 /// Where a segment meets a convex body (docs/physics.md §1.5, Cyrus–Beck form).
@@ -217,7 +251,7 @@ pub struct Clip {
 #[must_use]
 pub fn clip_segment(b: &Posed, v0: Vector, v1: Vector, eps: Scalar) -> Option<Clip> {
     let mut clip = Clip { t_in: 0.0, t_out: 1.0, plane_in: None, plane_out: None };
-    for (f, pl) in b.planes.iter().enumerate() {
+    for (f, pl) in b.all_planes().enumerate() {
         let d0 = pl.normal.dot(v0) - pl.offset - eps;
         let d1 = pl.normal.dot(v1) - pl.offset - eps;
         if d0 > 0.0 && d1 > 0.0 {
@@ -279,7 +313,7 @@ mod tests {
         assert!(!is_inside(&cube, Vector::new(0.6, 0.0, 0.0)));
         assert!(is_inside(&cube, Vector::new(0.5, 0.0, 0.0)));
         // The paper's literal test p·n_f < 0 fails for the centre: every p·n_f is 0 (E2).
-        assert!(cube.planes.iter().all(|pl| Vector::ZERO.dot(pl.normal) >= 0.0));
+        assert!(cube.all_planes().all(|pl| Vector::ZERO.dot(pl.normal) >= 0.0));
     }
 
     #[test]
