@@ -2,7 +2,7 @@
 //! (docs/physics.md §1.5, erratum E4).
 
 use crate::collision::contact::{Contact, Feature};
-use crate::collision::hull::{beyond_near_face, is_many_faced};
+use crate::collision::hull::{beyond_near_face, features_near, is_many_faced};
 use crate::collision::posed::{Posed, clip_segment, depth_along};
 use crate::math::Scalar;
 use crate::sim::context::StepContext;
@@ -36,7 +36,16 @@ pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let eps = b.tolerance();
     let reach = b.reach();
     let (many, mut hint) = (is_many_faced(b), 0);
-    for &[i, j] in &a.mesh.edges {
+    let mut near = Vec::new();
+    if is_many_faced(a) {
+        features_near(a, &reach, |c| &c.edges, &mut near);
+    }
+    let edges: Box<dyn Iterator<Item = &[u32; 2]>> = if is_many_faced(a) {
+        Box::new(near.iter().map(|&k| &a.mesh.edges[k as usize]))
+    } else {
+        Box::new(a.mesh.edges.iter())
+    };
+    for &[i, j] in edges {
         let (v0, v1) = (a.vertices[i as usize], a.vertices[j as usize]);
         if !reach.meets_segment(v0, v1) || (many && beyond_near_face(b, &[v0, v1], eps, &mut hint)) {
             continue; // a segment outside b's bounds, or beyond one of its faces, cannot cross b

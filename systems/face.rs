@@ -2,7 +2,7 @@
 //! (docs/physics.md §1.3, errata E2 and E3).
 
 use crate::collision::contact::{Contact, Feature, PairState};
-use crate::collision::hull::{is_many_faced, outside_near_face};
+use crate::collision::hull::{features_near, is_many_faced, outside_near_face};
 use crate::collision::posed::{Posed, depth_along, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
@@ -50,7 +50,13 @@ pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let (mut sum_normal, mut sum_area) = (Vector::ZERO, 0.0);
     let reach = b.reach();
     let (many, mut hint) = (is_many_faced(b), 0);
-    for (t, &centroid) in a.mesh.triangles.iter().zip(&a.centroids) {
+    let mut near = Vec::new();
+    if is_many_faced(a) {
+        features_near(a, &reach, |c| &c.triangles, &mut near);
+    }
+    let triangles: Box<dyn Iterator<Item = usize>> =
+        if is_many_faced(a) { Box::new(near.iter().map(|&k| k as usize)) } else { Box::new(0..a.mesh.triangles.len()) };
+    for (t, &centroid) in triangles.map(|k| (&a.mesh.triangles[k], &a.centroids[k])) {
         if reach.contains(centroid)
             && !(many && outside_near_face(b, centroid, b.tolerance(), &mut hint))
             && is_inside(b, centroid)

@@ -2,7 +2,7 @@
 //! (docs/physics.md §1.4, erratum E5).
 
 use crate::collision::contact::{Contact, Feature};
-use crate::collision::hull::{is_many_faced, outside_near_face};
+use crate::collision::hull::{features_near, is_many_faced, outside_near_face};
 use crate::collision::posed::{Posed, depth_along};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
@@ -31,7 +31,16 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let (many, mut hint) = (is_many_faced(b), 0);
     // Only vertices within b's bounds can be inside it: on a many-faced body, a handful, and
     // of those most are shown outside by a face near them before all faces are tried.
-    let candidates = a.vertices.iter().filter(|&&v| reach.contains(v));
+    let mut near = Vec::new();
+    if is_many_faced(a) {
+        features_near(a, &reach, |c| &c.vertices, &mut near);
+    }
+    let candidates: Box<dyn Iterator<Item = &Vector>> = if is_many_faced(a) {
+        Box::new(near.iter().map(|&i| &a.vertices[i as usize]))
+    } else {
+        Box::new(a.vertices.iter())
+    };
+    let candidates = candidates.filter(|&&v| reach.contains(v));
     for &v in candidates.filter(|&&v| !(many && outside_near_face(b, v, eps, &mut hint))) {
         let s = b.max_plane_distance(v);
         if s <= eps {

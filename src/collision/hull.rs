@@ -8,16 +8,15 @@
 //! Small meshes (a box) keep the exhaustive forms, which cost them less.
 
 use crate::collision::manifold::{Axis, PREFER, Reference};
-use crate::collision::posed::{BOUNDS_SLACK, Posed, in_box};
+use crate::collision::posed::{BOUNDS_SLACK, Posed, Reach, in_box};
 use crate::math::{Scalar, Vector};
+use crate::model::clusters::Cluster;
 
 /// The slab across the line of centres (see `contact_axis_near`) is widened by this share of
 /// the reach, so features a fast pair may bring into contact this step are among those tried.
 const SLAB_REACH: Scalar = 0.5;
 
-/// A mesh with more feature edges than this is many-faced (an icosphere of one subdivision
-/// has 120; a box 12, a 16-sided cylinder 48).
-pub const MANY_EDGES: usize = 48;
+pub use crate::model::mesh::MANY_EDGES;
 
 /// True for a mesh whose contact tests take the paths of this module.
 #[must_use]
@@ -76,6 +75,19 @@ pub fn lowest_vertex_seeded(p: &Posed, dir: Vector) -> (u32, Scalar) {
     let value = |i: &&u32| p.vertices[**i as usize].dot(dir);
     let start = p.mesh.seeds.iter().min_by(|i, j| value(i).total_cmp(&value(j))).copied().unwrap_or(0);
     lowest_vertex(p, dir, start)
+}
+
+/// The features of many-faced `a` of one kind (`members` of each cluster) in the clusters whose
+/// bounding sphere meets `reach`, into `out` in increasing order: the order, and so the sums,
+/// of a test over all of them. No other feature has a point within `reach`.
+pub fn features_near(a: &Posed, reach: &Reach, members: fn(&Cluster) -> &[u32], out: &mut Vec<u32>) {
+    out.clear();
+    for (c, &centre) in a.mesh.clusters.iter().zip(&a.cluster_centres) {
+        if reach.meets_sphere(centre, c.radius) {
+            out.extend_from_slice(members(c));
+        }
+    }
+    out.sort_unstable();
 }
 
 /// The features of one body near the overlap of two: the faces with an outline vertex in

@@ -62,9 +62,7 @@ pub fn manifold(a: &Posed, b: &Posed, axis: &Axis, reach: Scalar, scratch: &mut 
             // An edge axis nearly along a face normal is a face resting on an edge (a cube over
             // a wall's edge, whose far corners make the wall's face axis read deeper): clipped
             // against that face it gets a point at each end of the edge, not one to seesaw on.
-            let best = |p: &Posed, n: Vector| {
-                p.all_planes().enumerate().map(|(f, pl)| (pl.normal.dot(n), f)).max_by(|x, y| x.0.total_cmp(&y.0))
-            };
+            let best = |p: &Posed, n: Vector| p.most_along(n);
             match (best(b, axis.normal), best(a, -axis.normal)) {
                 (Some((cb, fb)), Some((ca, _))) if cb >= ca && cb >= EDGE_ON_FACE => (b, a, fb),
                 (_, Some((ca, fa))) if ca >= EDGE_ON_FACE => (a, b, fa),

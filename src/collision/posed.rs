@@ -38,6 +38,14 @@ impl Reach {
         in_box(p, self.bounds) && (p - self.centre).length_squared() <= self.radius * self.radius
     }
 
+    /// True when a sphere may meet the body.
+    #[must_use]
+    pub fn meets_sphere(&self, centre: Vector, radius: Scalar) -> bool {
+        let nearest = centre.clamp(self.bounds.0, self.bounds.1);
+        (nearest - centre).length_squared() <= radius * radius
+            && (centre - self.centre).length() <= radius + self.radius
+    }
+
     /// True when segment `p`–`q` may meet the body.
     #[must_use]
     pub fn meets_segment(&self, p: Vector, q: Vector) -> bool {
@@ -83,6 +91,8 @@ pub struct Posed {
     pub centroids: Vec<Vector>,
     /// World axis-aligned bounds of the vertices, (min, max) [m].
     pub bounds: (Vector, Vector),
+    /// World centres of the mesh's feature clusters (a many-faced mesh's), in order [m].
+    pub cluster_centres: Vec<Vector>,
 }
 
 impl Posed {
@@ -99,6 +109,7 @@ impl Posed {
             edge_directions: Vec::new(),
             centroids: Vec::new(),
             bounds: (Vector::ZERO, Vector::ZERO),
+            cluster_centres: Vec::new(),
         };
         posed.update(pose);
         posed
@@ -123,6 +134,8 @@ impl Posed {
             self.planes.set(planes).expect("taken just above");
             self.edge_directions.extend(self.mesh.edge_directions.iter().map(|&d| r * d));
         }
+        self.cluster_centres.clear();
+        self.cluster_centres.extend(self.mesh.clusters.iter().map(|c| x + r * c.centre));
         self.centroids.clear();
         let vertices = &self.vertices;
         self.centroids.extend(self.mesh.triangles.iter().map(|t| {
@@ -148,10 +161,7 @@ impl Posed {
 
     /// Every world plane, in order.
     pub fn all_planes(&self) -> impl Iterator<Item = Plane> + '_ {
-        self.planes
-            .get_or_init(|| self.mesh.planes.iter().map(|&p| turned(p, self.rotation, self.position)).collect())
-            .iter()
-            .copied()
+        self.world_planes().iter().copied()
     }
 
     /// This body's bounds and bounding sphere widened by `BOUNDS_SLACK` of its radius: every
@@ -185,10 +195,12 @@ impl Posed {
         let tie = FACE_TIE_TOLERANCE * self.mesh.radius;
         let toward = other.position - self.position;
         let mut chosen = (Scalar::INFINITY, Scalar::NEG_INFINITY, Vector::ZERO);
-        for pl in self.all_planes().filter(|pl| pl.normal.dot(p) - pl.offset >= best - tie) {
-            let (depth, facing) = (depth_along(other, self, pl.normal), pl.normal.dot(toward));
+        let (q, planes, turn) = self.planes_for(p);
+        for pl in planes.iter().filter(|pl| pl.normal.dot(q) - pl.offset >= best - tie) {
+            let normal = turn.map_or(pl.normal, |r| r * pl.normal);
+            let (depth, facing) = (depth_along(other, self, normal), normal.dot(toward));
             if depth < chosen.0 || (depth == chosen.0 && facing > chosen.1) {
-                chosen = (depth, facing, pl.normal);
+                chosen = (depth, facing, normal);
             }
         }
         chosen.2
@@ -198,7 +210,34 @@ impl Posed {
     /// tolerance, and minus it is the depth below the closest face (docs/physics.md §1.1).
     #[must_use]
     pub fn max_plane_distance(&self, p: Vector) -> Scalar {
-        self.all_planes().map(|pl| pl.normal.dot(p) - pl.offset).fold(Scalar::NEG_INFINITY, Scalar::max)
+        let (q, planes, _) = self.planes_for(p);
+        planes.iter().map(|pl| pl.normal.dot(q) - pl.offset).fold(Scalar::NEG_INFINITY, Scalar::max)
+    }
+
+    /// The planes to measure `p` against, `p` in their frame, and the rotation that takes their
+    /// normals to the world: a small mesh's world planes, or a many-faced mesh's body-frame
+    /// planes with `p` taken into the body frame, so no plane need be turned.
+    fn planes_for(&self, p: Vector) -> (Vector, &[Plane], Option<crate::math::Mat3>) {
+        if self.mesh.clusters.is_empty() {
+            (p, self.world_planes(), None)
+        } else {
+            (self.rotation.transpose() * (p - self.position), &self.mesh.planes, Some(self.rotation))
+        }
+    }
+
+    fn world_planes(&self) -> &[Plane] {
+        self.planes.get_or_init(|| self.mesh.planes.iter().map(|&p| turned(p, self.rotation, self.position)).collect())
+    }
+
+    /// The face whose outward normal is most along `dir` (world), with that cosine.
+    #[must_use]
+    pub fn most_along(&self, dir: Vector) -> Option<(Scalar, usize)> {
+        let (d, planes) = if self.mesh.clusters.is_empty() {
+            (dir, self.world_planes())
+        } else {
+            (self.rotation.transpose() * dir, &self.mesh.planes[..])
+        };
+        planes.iter().enumerate().map(|(f, pl)| (pl.normal.dot(d), f)).max_by(|x, y| x.0.total_cmp(&y.0))
     }
 }
 
@@ -222,7 +261,8 @@ fn turned(p: Plane, r: crate::math::Mat3, x: Vector) -> Plane {
 #[must_use]
 pub fn is_inside(b: &Posed, p: Vector) -> bool {
     let eps = b.tolerance();
-    b.all_planes().all(|pl| pl.normal.dot(p) - pl.offset <= eps)
+    let (q, planes, _) = b.planes_for(p);
+    planes.iter().all(|pl| pl.normal.dot(q) - pl.offset <= eps)
 }
 
 /// Where a segment meets a convex body (docs/physics.md §1.5, Cyrus–Beck form).
@@ -251,7 +291,9 @@ pub struct Clip {
 #[must_use]
 pub fn clip_segment(b: &Posed, v0: Vector, v1: Vector, eps: Scalar) -> Option<Clip> {
     let mut clip = Clip { t_in: 0.0, t_out: 1.0, plane_in: None, plane_out: None };
-    for (f, pl) in b.all_planes().enumerate() {
+    let (v0, planes, turn) = b.planes_for(v0);
+    let v1 = if turn.is_some() { b.rotation.transpose() * (v1 - b.position) } else { v1 };
+    for (f, pl) in planes.iter().enumerate() {
         let d0 = pl.normal.dot(v0) - pl.offset - eps;
         let d1 = pl.normal.dot(v1) - pl.offset - eps;
         if d0 > 0.0 && d1 > 0.0 {

@@ -84,6 +84,9 @@ pub struct ConvexMesh {
     pub vertex_edges: Vec<u32>,
     /// Where each vertex's feature edges start in `vertex_edges`, plus one entry for the end.
     pub vertex_edge_start: Vec<u32>,
+    /// The features grouped by direction, each group with a bounding sphere (empty unless the
+    /// mesh is many-faced: more than `MANY_EDGES` feature edges).
+    pub clusters: Vec<crate::model::clusters::Cluster>,
     /// The vertices farthest along each of 26 directions (the faces, edges and corners of a
     /// cube), each once: a walk for the vertex lowest along any direction starts at the best
     /// of them and has only a few steps left.
@@ -138,8 +141,14 @@ impl ConvexMesh {
             feature_edges.iter().enumerate().flat_map(|(e, &[i, j])| [(i, e as u32), (j, e as u32)]),
         );
         let seeds = seeds(&vertices);
+        let clusters = if feature_edges.len() > MANY_EDGES {
+            crate::model::clusters::clusters(&vertices, &triangles, &edges)
+        } else {
+            Vec::new()
+        };
         let mesh = Self {
             seeds,
+            clusters,
             vertices,
             triangles,
             edges,
@@ -174,6 +183,11 @@ impl ConvexMesh {
         Self::new(v, t).expect("a box with positive sizes is a valid convex mesh").0
     }
 }
+
+/// A mesh with more feature edges than this is many-faced: its contact tests visit the
+/// features near the contact only (`collision::hull`; an icosphere of one subdivision has 120,
+/// a box 12, a 16-sided cylinder 48).
+pub const MANY_EDGES: usize = 48;
 
 /// Every mesh of a simulation, once: box-gas's 64 000 cubes share one.
 #[derive(Clone, Debug, Default)]
