@@ -56,7 +56,7 @@ pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     }
     let triangles: Box<dyn Iterator<Item = usize>> =
         if is_many_faced(a) { Box::new(near.iter().map(|&k| k as usize)) } else { Box::new(0..a.mesh.triangles.len()) };
-    for (t, &centroid) in triangles.map(|k| (&a.mesh.triangles[k], &a.centroids[k])) {
+    for (t, centroid) in triangles.map(|k| (&a.mesh.triangles[k], a.centroid(k))) {
         if reach.contains(centroid)
             && !(many && outside_near_face(b, centroid, b.tolerance(), &mut hint))
             && is_inside(b, centroid)

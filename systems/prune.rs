@@ -197,6 +197,8 @@ fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
 ///   1 + P_A + P_B + 64 axes per pair, with early exits.
 pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let mut speculative = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().speculative);
+    let mut touching = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().touching);
+    let step = ctx.step;
     ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut speculative);
     let (b, meshes, params, dt) = (&ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
     let margin = |p: &Pair| pair_margin(p, b, meshes, params, (dt, &speculative));
@@ -220,11 +222,16 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|pair| {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
+        let (resting, first) = (touching.binary_search(&(pair.a, pair.b)).is_ok(), u64::from(pair.a));
         classify(pair, margin(pair), |[wide, proof]| {
             if is_many_faced(pa) || is_many_faced(pb) {
-                // One GJK bound answers both margins.
-                // (Its first direction is the line of centres, which `separated` tries.)
-                let bound = distance_bound(pa, pb, wide).max(bounds_gap(pa, pb));
+                let gap = bounds_gap(pa, pb);
+                if resting && !(step + first).is_multiple_of(RETEST_EVERY) {
+                    return [gap > wide, gap <= wide && wide > proof && gap > proof];
+                }
+                // One GJK bound answers both margins (its first direction is the line of
+                // centres, which `separated` tries).
+                let bound = distance_bound(pa, pb, wide).max(gap);
                 return [bound > wide, bound <= wide && wide > proof && bound > proof];
             }
             let by_wide = separated(pa, pb, wide);
@@ -232,14 +239,28 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         });
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
-    ctx.scratch.get_mut::<PruneScratch>().speculative = speculative;
+    let (posed, pairs) = (&ctx.posed, &ctx.pairs);
+    touching.clear();
+    let many = |p: &&Pair| is_many_faced(posed.get(p.a)) || is_many_faced(posed.get(p.b));
+    touching.extend(pairs.iter().filter(|p| p.is_candidate()).filter(many).map(|p| (p.a, p.b)));
+    let scratch = ctx.scratch.get_mut::<PruneScratch>();
+    (scratch.speculative, scratch.touching) = (speculative, touching);
 }
 
-/// `prune`'s reused buffer: each body's speculative distance (`Params::speculative_distances`),
-/// found afresh each step.
+/// Steps between GJK tests of a pair with a many-faced body that GJK could not prove apart
+/// last time: such a pair rests or slides on its neighbour, and GJK, which cannot part it,
+/// costs more than the tests it would spare. Until its turn it stays a candidate, which is
+/// always safe (the tests decide), and its turn comes on a step spread by its first body.
+const RETEST_EVERY: u64 = 8;
+
+/// `prune`'s reused buffers and the one thing it remembers from step to step.
 #[derive(Default)]
 struct PruneScratch {
+    /// Each body's speculative distance (`Params::speculative_distances`), found afresh each
+    /// step.
     speculative: Vec<Scalar>,
+    /// The pairs with a many-faced body not proved apart last step, sorted.
+    touching: Vec<(u32, u32)>,
 }
 
 #[cfg(test)]

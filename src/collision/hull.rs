@@ -81,18 +81,48 @@ pub fn lowest_vertex_seeded(p: &Posed, dir: Vector) -> (u32, Scalar) {
 /// bounding sphere meets `reach`, into `out` in increasing order: the order, and so the sums,
 /// of a test over all of them. No other feature has a point within `reach`.
 pub fn features_near(a: &Posed, reach: &Reach, members: fn(&Cluster) -> &[u32], out: &mut Vec<u32>) {
-    out.clear();
+    let mut set = BitSet::default();
     for (c, &centre) in a.mesh.clusters.iter().zip(&a.cluster_centres) {
         if reach.meets_sphere(centre, c.radius) {
-            out.extend_from_slice(members(c));
+            set.extend(members(c));
         }
     }
-    out.sort_unstable();
+    set.into_sorted(out);
 }
 
-/// The features of one body near the overlap of two: the faces with an outline vertex in
-/// the region, the feature edges with an end in it, and a vertex to start walks from. A small
-/// mesh gives all its features.
+/// A set of small indices, read back in increasing order: cheaper than sorting and
+/// deduplicating the lists it gathers.
+#[derive(Default)]
+struct BitSet {
+    words: Vec<u64>,
+}
+
+impl BitSet {
+    fn extend(&mut self, items: &[u32]) {
+        for &i in items {
+            let (w, bit) = (i as usize / 64, i % 64);
+            if w >= self.words.len() {
+                self.words.resize(w + 1, 0);
+            }
+            self.words[w] |= 1 << bit;
+        }
+    }
+
+    fn into_sorted(self, out: &mut Vec<u32>) {
+        out.clear();
+        for (w, &word) in self.words.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                out.push(w as u32 * 64 + bits.trailing_zeros());
+                bits &= bits - 1;
+            }
+        }
+    }
+}
+
+/// The features of one body near the overlap of two: the faces around its vertices in the
+/// region, the feature edges at those also in the tight region, and a vertex to start walks
+/// from. A small mesh gives all its features.
 struct Near {
     faces: Vec<u32>,
     edges: Vec<u32>,
@@ -113,44 +143,42 @@ struct Region {
 /// that are in it too, then the faces and feature edges at the vertices reached. A contact
 /// patch is one connected piece of a convex surface, so the flood reaches all of it while
 /// visiting only it.
-fn near(p: &Posed, region: &Region, from: u32) -> Near {
+fn near(p: &Posed, (wide, tight): (&Region, &Region), from: u32) -> Near {
     let m = &p.mesh;
     if !is_many_faced(p) {
         let faces = (0..m.planes.len() as u32).collect();
         return Near { faces, edges: (0..m.feature_edges.len() as u32).collect(), start: from };
     }
-    let within = |i: u32| {
+    let within = |region: &Region, i: u32| {
         let v = p.vertices[i as usize];
         let s = v.dot(region.d);
         in_box(v, region.bounds) && s >= region.slab.0 && s <= region.slab.1
     };
     let mut seen = vec![false; m.vertices.len()];
-    let (mut stack, mut reached) = (vec![from], Vec::new());
+    let (mut stack, mut faces, mut edges) = (vec![from], BitSet::default(), BitSet::default());
     seen[from as usize] = true;
     while let Some(i) = stack.pop() {
-        reached.push(i);
-        for &j in &m.neighbours[m.neighbour_start[i as usize] as usize..m.neighbour_start[i as usize + 1] as usize] {
-            if !seen[j as usize] && within(j) {
+        faces.extend(row(&m.vertex_faces, &m.vertex_face_start, i));
+        // The start is the body's point nearest the other: its edges are always tried.
+        if i == from || within(tight, i) {
+            edges.extend(row(&m.vertex_edges, &m.vertex_edge_start, i));
+        }
+        for &j in row(&m.neighbours, &m.neighbour_start, i) {
+            if !seen[j as usize] && within(wide, j) {
                 seen[j as usize] = true;
                 stack.push(j);
             }
         }
     }
-    let gather = |flat: &[u32], start: &[u32]| {
-        let mut out: Vec<u32> = reached
-            .iter()
-            .flat_map(|&i| &flat[start[i as usize] as usize..start[i as usize + 1] as usize])
-            .copied()
-            .collect();
-        out.sort_unstable();
-        out.dedup();
-        out
-    };
-    Near {
-        faces: gather(&m.vertex_faces, &m.vertex_face_start),
-        edges: gather(&m.vertex_edges, &m.vertex_edge_start),
-        start: from,
-    }
+    let (mut face_list, mut edge_list) = (Vec::new(), Vec::new());
+    faces.into_sorted(&mut face_list);
+    edges.into_sorted(&mut edge_list);
+    Near { faces: face_list, edges: edge_list, start: from }
+}
+
+/// Row `i` of a flat list with start offsets.
+fn row<'a>(flat: &'a [u32], start: &[u32], i: u32) -> &'a [u32] {
+    &flat[start[i as usize] as usize..start[i as usize + 1] as usize]
 }
 
 /// True when edge arcs (a, b) and (c, d) cross on the Gauss map, the arcs given by their end
@@ -179,7 +207,6 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
     let slack = BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius) + SLAB_REACH * reach.max(0.0);
     let slab = (low_a.min(high_b) - slack, low_a.max(high_b) + slack);
     let region = Region { bounds: (lo, hi), d, slab };
-    let (na, nb) = (near(a, &region, from_a), near(b, &region, from_b));
     // Edge pairs only where the bodies meet now: an edge axis matters for edges that touch or
     // cross, and a pair still apart by up to the reach is held along a face axis as well.
     let tight = BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius);
@@ -188,30 +215,43 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
         d,
         slab: (low_a.min(high_b) - tight, low_a.max(high_b) + tight),
     };
-    let (ea, eb) = (near(a, &edges_region, from_a).edges, near(b, &edges_region, from_b).edges);
+    let (na, nb) = (near(a, (&region, &edges_region), from_a), near(b, (&region, &edges_region), from_b));
+    let (ea, eb) = (&na.edges, &nb.edges);
     if na.faces.is_empty() || nb.faces.is_empty() {
         return crate::collision::manifold::contact_axis_all(a, b, (margin, reach));
     }
     let mut best: Option<Axis> = None;
-    let mut consider = |normal: Vector, separation: Scalar, reference: Reference, prefer: Scalar| {
-        if best.is_none_or(|x| separation > x.separation + prefer) {
-            best = Some(Axis { normal, separation, reference });
-        }
+    // An axis is taken only if it beats the best so far by `prefer`; a face whose bound (the
+    // other body's start vertex, no lower than its lowest) cannot do that needs no walk.
+    let wins = |best: &Option<Axis>, separation: Scalar, prefer: Scalar| {
+        best.is_none_or(|x| separation > x.separation + prefer)
     };
+    let consider =
+        |best: &mut Option<Axis>, normal: Vector, separation: Scalar, reference: Reference, prefer: Scalar| {
+            if wins(best, separation, prefer) {
+                *best = Some(Axis { normal, separation, reference });
+            }
+        };
+    let (start_a, start_b) = (a.vertices[na.start as usize], b.vertices[nb.start as usize]);
     for &f in &nb.faces {
         let pl = b.plane(f as usize);
-        consider(pl.normal, lowest_vertex(a, pl.normal, na.start).1 - pl.offset, Reference::FaceOfB(f), 0.0);
+        if wins(&best, start_a.dot(pl.normal) - pl.offset, 0.0) {
+            let separation = lowest_vertex(a, pl.normal, na.start).1 - pl.offset;
+            consider(&mut best, pl.normal, separation, Reference::FaceOfB(f), 0.0);
+        }
     }
     for &f in &na.faces {
         let pl = a.plane(f as usize);
-        let separation = lowest_vertex(b, pl.normal, nb.start).1 - pl.offset;
-        consider(-pl.normal, separation, Reference::FaceOfA(f), PREFER * margin);
+        if wins(&best, start_b.dot(pl.normal) - pl.offset, PREFER * margin) {
+            let separation = lowest_vertex(b, pl.normal, nb.start).1 - pl.offset;
+            consider(&mut best, -pl.normal, separation, Reference::FaceOfA(f), PREFER * margin);
+        }
     }
-    for &ea in &ea {
+    for &ea in ea {
         let ([i, j], [f, g]) = (a.mesh.feature_edges[ea as usize], a.mesh.feature_edge_faces[ea as usize]);
         let (a0, a1) = (a.vertices[i as usize], a.vertices[j as usize]);
         let (fa, ga) = (a.plane(f as usize).normal, a.plane(g as usize).normal);
-        for &eb in &eb {
+        for &eb in eb {
             let ([k, l], [h, m]) = (b.mesh.feature_edges[eb as usize], b.mesh.feature_edge_faces[eb as usize]);
             let (hb, mb) = (b.plane(h as usize).normal, b.plane(m as usize).normal);
             if !arcs_cross(fa, ga, -hb, -mb) {
@@ -221,7 +261,7 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
             let Some(n) = (a1 - a0).cross(b1 - b0).try_normalize() else { continue };
             // Outward of B at its edge, so from B to A; the gap is then between the two lines.
             let n = if n.dot(b0 - b.position) < 0.0 { -n } else { n };
-            consider(n, n.dot(a0 - b0), Reference::Edges, PREFER * margin);
+            consider(&mut best, n, n.dot(a0 - b0), Reference::Edges, PREFER * margin);
         }
     }
     best.filter(|x| x.separation <= reach)

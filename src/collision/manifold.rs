@@ -273,10 +273,10 @@ pub fn support_point(a: &Posed, b: &Posed, axis: &Axis) -> Vector {
     let n = axis.normal;
     let tol = 1e-6 * a.mesh.radius.max(b.mesh.radius);
     let feature = |p: &Posed, dir: Vector| {
-        let low = p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
+        let lowest = lowest_vertices(p, dir, tol);
         let mut out = [Vector::ZERO; 2];
         let (mut count, mut sum) = (0, Vector::ZERO);
-        for &v in p.vertices.iter().filter(|v| v.dot(dir) <= low + tol) {
+        for v in lowest {
             if count < 2 {
                 out[count] = v;
             }
@@ -292,6 +292,30 @@ pub fn support_point(a: &Posed, b: &Posed, axis: &Axis) -> Vector {
     } else {
         0.5 * (ma + mb)
     }
+}
+
+/// The vertices of `p` within `tol` of the lowest along `dir`, in index order: all of them
+/// scanned, or for a many-faced body found by walking to the lowest and flooding over
+/// neighbours (the vertices below any level of a linear function are connected on a convex
+/// hull, so the flood reaches each).
+fn lowest_vertices(p: &Posed, dir: Vector, tol: Scalar) -> Vec<Vector> {
+    if !is_many_faced(p) {
+        let low = p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
+        return p.vertices.iter().copied().filter(|v| v.dot(dir) <= low + tol).collect();
+    }
+    let m = &p.mesh;
+    let (first, low) = crate::collision::hull::lowest_vertex_seeded(p, dir);
+    let (mut found, mut stack) = (vec![first], vec![first]);
+    while let Some(i) = stack.pop() {
+        for &j in &m.neighbours[m.neighbour_start[i as usize] as usize..m.neighbour_start[i as usize + 1] as usize] {
+            if p.vertices[j as usize].dot(dir) <= low + tol && !found.contains(&j) {
+                found.push(j);
+                stack.push(j);
+            }
+        }
+    }
+    found.sort_unstable();
+    found.iter().map(|&i| p.vertices[i as usize]).collect()
 }
 
 /// The closest points of segments p0p1 and q0q1 (Ericson, "Real-Time Collision Detection",

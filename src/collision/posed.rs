@@ -87,7 +87,8 @@ pub struct Posed {
     /// World feature-edge directions, in the mesh's order (empty for a many-faced mesh).
     pub edge_directions: Vec<Vector>,
     /// World centroids of the triangles, in the mesh's order [m] (the face test's points:
-    /// found once per body and step, not once per pair and direction).
+    /// found once per body and step, not once per pair and direction; empty for a many-faced
+    /// mesh, whose face test finds the few near the contact: `Posed::centroid`).
     pub centroids: Vec<Vector>,
     /// World axis-aligned bounds of the vertices, (min, max) [m].
     pub bounds: (Vector, Vector),
@@ -137,11 +138,23 @@ impl Posed {
         self.cluster_centres.clear();
         self.cluster_centres.extend(self.mesh.clusters.iter().map(|c| x + r * c.centre));
         self.centroids.clear();
+        if many {
+            return;
+        }
         let vertices = &self.vertices;
         self.centroids.extend(self.mesh.triangles.iter().map(|t| {
             let [p0, p1, p2] = t.map(|i| vertices[i as usize]);
             (p0 + p1 + p2) / 3.0
         }));
+    }
+
+    /// The world centroid of triangle `t`.
+    #[must_use]
+    pub fn centroid(&self, t: usize) -> Vector {
+        self.centroids.get(t).copied().unwrap_or_else(|| {
+            let [p0, p1, p2] = self.mesh.triangles[t].map(|i| self.vertices[i as usize]);
+            (p0 + p1 + p2) / 3.0
+        })
     }
 
     /// World plane `f`.
