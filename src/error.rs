@@ -67,7 +67,9 @@ pub enum MeshError {
         volume: f64,
     },
     /// A vertex stands in front of a face plane.
-    #[error("mesh is not convex: vertex {vertex} lies {distance:e} m in front of face plane {face}")]
+    #[error(
+        "mesh is not convex: vertex {vertex} lies {distance:e} m in front of face plane {face}; use `hull: true` for the convex hull of its points"
+    )]
     NonConvex {
         /// Vertex index.
         vertex: usize,

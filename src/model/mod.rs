@@ -5,4 +5,5 @@ pub mod clusters;
 pub mod components;
 pub mod mass;
 pub mod mesh;
+pub mod quickhull;
 pub mod shapes;

@@ -119,9 +119,10 @@ fn mesh_of(shape: &ShapeDef, path: &Path) -> Result<ConvexMesh, (String, crate::
         ShapeDef::Octahedron { radius } => shapes::octahedron_raw(*radius),
         ShapeDef::Icosphere { radius, subdivisions } => shapes::icosphere_raw(*radius, *subdivisions),
         ShapeDef::Cylinder { radius, height, segments } => shapes::cylinder_raw(*radius, *height, *segments),
-        ShapeDef::Obj { path: obj, scale } => {
+        ShapeDef::Obj { path: obj, scale, hull } => {
             let file = crate::scene::base_dir(path).join(obj);
-            let raw = crate::scene::obj::load_obj(&file, *scale)
+            let load = if *hull { crate::scene::obj::load_obj_hull } else { crate::scene::obj::load_obj };
+            let raw = load(&file, *scale)
                 .map_err(|reason| (file.display().to_string(), crate::error::MeshError::Unreadable { reason }))?;
             return ConvexMesh::new(raw.0, raw.1).map(|(m, _)| m).map_err(|e| (file.display().to_string(), e));
         }

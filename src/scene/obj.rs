@@ -1,4 +1,5 @@
-//! Wavefront OBJ reader: `tobj` parses the file, this module turns it into a validated mesh.
+//! Wavefront OBJ reader: `tobj` parses the file, this module turns it into a validated mesh; with
+//! `hull: true`, the convex hull of the file's `v` points instead.
 
 use crate::math::{Scalar, Vector};
 use crate::model::shapes::RawMesh;
@@ -30,12 +31,53 @@ pub fn load_obj(path: &Path, scale: Scalar) -> Result<RawMesh, String> {
         triangles.extend(m.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
     }
     if triangles.is_empty() {
-        return Err("no faces: an OBJ body needs `f` lines".to_string());
+        return Err(
+            "no faces: an OBJ body needs `f` lines, or `hull: true` for the convex hull of its `v` points".to_string()
+        );
     }
     if triangles.iter().flatten().any(|&i| i as usize >= vertices.len()) {
         return Err("a face refers to a vertex that does not exist".to_string());
     }
     Ok(drop_unused(&vertices, &triangles))
+}
+
+/// The convex hull of every `v` point of an OBJ file, scaled by `scale` (`hull: true`):
+/// faces, if any, are ignored, so a bare point cloud, a model with concave parts, repeated or
+/// inner vertices all become the convex body of their points (`model::quickhull`). Errors are
+/// worded for the user and name no path (the caller adds it).
+pub fn load_obj_hull(path: &Path, scale: Scalar) -> Result<RawMesh, String> {
+    let points = load_points(path, scale)?;
+    crate::model::quickhull::convex_hull(&points).map_err(|e| e.to_string())
+}
+
+/// The `v` lines of an OBJ file, in order, scaled: their first three numbers (a fourth, or
+/// colours after them, are ignored, as `tobj` does); every other line is ignored.
+fn load_points(path: &Path, scale: Scalar) -> Result<Vec<Vector>, String> {
+    let bytes = std::fs::read(path).map_err(|_| "cannot open the file".to_string())?;
+    let text = String::from_utf8(bytes).map_err(|_| "cannot read the file: it is not UTF-8 text".to_string())?;
+    let mut points = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        if words.next() != Some("v") {
+            continue;
+        }
+        let mut xyz = [0.0; 3];
+        for x in &mut xyz {
+            *x = words
+                .next()
+                .and_then(|w| w.parse::<Scalar>().ok())
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| format!("line {}: a `v` line needs three finite numbers", n + 1))?;
+        }
+        points.push(Vector::from_array(xyz) * scale);
+        if points.len() > MAX_OBJ_VERTICES {
+            return Err(format!("more than {MAX_OBJ_VERTICES} vertices"));
+        }
+    }
+    if points.is_empty() {
+        return Err("no vertices: `hull: true` needs `v` lines".to_string());
+    }
+    Ok(points)
 }
 
 /// Keeps only the vertices some face uses, in their order: a stray `v` line would otherwise

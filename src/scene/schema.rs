@@ -159,6 +159,10 @@ pub enum ShapeDef {
         /// Uniform scale (default 1).
         #[serde(default = "one")]
         scale: Scalar,
+        /// Take the convex hull of the file's `v` points, faces ignored (default false): for
+        /// point clouds and non-convex or messy models.
+        #[serde(default)]
+        hull: bool,
     },
 }
 
@@ -204,7 +208,7 @@ impl ShapeDef {
                 }
                 Ok(())
             }
-            Self::Obj { path, scale } => {
+            Self::Obj { path, scale, .. } => {
                 if path.is_empty() {
                     return Err(("shape.path".into(), "must name an OBJ file".into()));
                 }

@@ -244,7 +244,7 @@ fn check_shape(shape: &ShapeDef) -> Result<(), (String, String)> {
             }
             Ok(())
         }
-        ShapeDef::Obj { path, scale } => {
+        ShapeDef::Obj { path, scale, .. } => {
             if path.is_empty() {
                 return Err(("shape.path".into(), "must name an OBJ file".into()));
             }
