@@ -172,7 +172,7 @@ fn one() -> Scalar {
 
 impl ShapeDef {
     /// Checks sizes and counts; `Err((field, reason))`.
-    fn check(&self) -> Result<(), (String, String)> {
+    pub(crate) fn check(&self) -> Result<(), (String, String)> {
         let positive = |field: &str, v: Scalar| {
             if v.is_finite() && v > 0.0 {
                 Ok(())

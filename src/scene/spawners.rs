@@ -155,7 +155,7 @@ impl SpawnerDef {
                 finite_nonneg("speed", *speed)?;
                 finite_nonneg("spin", *spin)
             }
-            Self::Rain { shape, .. } => check_shape(shape),
+            Self::Rain { shape, .. } => shape.check(),
             Self::BoxGas { .. } | Self::Pyramid { .. } => Ok(()),
         }
     }
@@ -203,52 +203,6 @@ impl SpawnerDef {
             Self::BoxGas { actors, seed } => box_gas(*actors, *seed),
             Self::Pyramid { base } => crate::scene::benchmarks::pyramid(*base),
             Self::Rain { actors, seed, shape } => crate::scene::benchmarks::rain_of(*actors, *seed, shape),
-        }
-    }
-}
-
-/// The checks an actor's shape gets when parsed (`ShapeDef::check` in schema.rs, which is private
-/// there; `shape_checks_agree_with_the_actor_checks` below keeps the two in step), for a
-/// spawner's `shape`; `Err((field, reason))` with the field as `shape.<name>`.
-fn check_shape(shape: &ShapeDef) -> Result<(), (String, String)> {
-    use crate::model::shapes::{MAX_SUBDIVISIONS, SEGMENTS_RANGE};
-    let positive = |field: &str, v: Scalar| {
-        if v.is_finite() && v > 0.0 {
-            Ok(())
-        } else {
-            Err((format!("shape.{field}"), format!("must be a finite number > 0 m, got {v}")))
-        }
-    };
-    match shape {
-        ShapeDef::Box { size: (x, y, z) } => {
-            [("size.x", *x), ("size.y", *y), ("size.z", *z)].iter().try_for_each(|(f, v)| positive(f, *v))
-        }
-        ShapeDef::Tetrahedron { edge } => positive("edge", *edge),
-        ShapeDef::Octahedron { radius } => positive("radius", *radius),
-        ShapeDef::Icosphere { radius, subdivisions } => {
-            positive("radius", *radius)?;
-            if *subdivisions > MAX_SUBDIVISIONS {
-                return Err((
-                    "shape.subdivisions".into(),
-                    format!("must be 0..={MAX_SUBDIVISIONS}, got {subdivisions}"),
-                ));
-            }
-            Ok(())
-        }
-        ShapeDef::Cylinder { radius, height, segments } => {
-            positive("radius", *radius)?;
-            positive("height", *height)?;
-            if !SEGMENTS_RANGE.contains(segments) {
-                let (lo, hi) = (SEGMENTS_RANGE.start(), SEGMENTS_RANGE.end());
-                return Err(("shape.segments".into(), format!("must be {lo}..={hi}, got {segments}")));
-            }
-            Ok(())
-        }
-        ShapeDef::Obj { path, scale, .. } => {
-            if path.is_empty() {
-                return Err(("shape.path".into(), "must name an OBJ file".into()));
-            }
-            positive("scale", *scale)
         }
     }
 }
@@ -380,7 +334,7 @@ mod tests {
 
     #[test]
     fn shape_checks_agree_with_the_actor_checks() {
-        // A spawner's shape is judged as an actor's: same verdict, same field, same reason.
+        // A spawner's shape is judged as an actor's (the same check): same verdict, field, reason.
         let shapes = [
             "Box(size: (1.0, 2.0, 3.0))",
             "Box(size: (1.0, 0.0, 3.0))",
