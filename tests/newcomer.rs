@@ -185,6 +185,33 @@ fn flags_read_as_a_newcomer_expects() {
 }
 
 #[test]
+fn systems_all_lists_every_shipped_system_and_marks_the_default_ones() {
+    let (out, _) = text(&rigid(&["systems", "--all"]));
+    for name in
+        ["cull", "prune", "face", "vertex", "edge", "gravity", "resolve", "solve", "correct", "sleep", "integrate"]
+    {
+        assert!(out.lines().any(|l| l.starts_with('*') && l.contains(&format!(" {name} "))), "{name}: {out}");
+    }
+    let other = out.lines().find(|l| l.contains(" cull_all_pairs ")).expect("the paper's all-pairs cull is listed");
+    assert!(!other.starts_with('*'), "not in the default schedule: {other}");
+    // Into a pipe without --all: the default schedule's names, one a line, as scripts read it.
+    let (plain, _) = text(&rigid(&["systems"]));
+    assert_eq!(plain.lines().count(), 11);
+}
+
+#[test]
+fn render_and_export_take_threads_and_quiet() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let frames = dir.path().join("frames").display().to_string();
+    let o = rigid(&["render", "--steps", "4", "--size", "32x24", "--threads", "1", "-q", "-o", &frames]);
+    assert!(o.status.success() && text(&o).0.is_empty(), "{}", text(&o).1);
+    let glb = dir.path().join("run.glb").display().to_string();
+    let o = rigid(&["export", "--steps", "4", "--threads", "2", "--quiet", "--glb", &glb]);
+    assert!(o.status.success() && text(&o).0.is_empty(), "{}", text(&o).1);
+    assert!(std::path::Path::new(&glb).exists());
+}
+
+#[test]
 fn a_schedule_that_integrates_before_detecting_is_warned_about() {
     let order = "cull,prune,face,vertex,edge,gravity,integrate,solve";
     let (_, err) = text(&rigid(&["run", "scenes/box-drop.ron", "--schedule", order, "--steps", "1", "-q"]));

@@ -29,7 +29,12 @@ pub enum Command {
         scene: PathBuf,
     },
     /// List every shipped system, the default schedule's in run order (marked), then the others.
-    Systems,
+    Systems {
+        /// Every shipped system with what it does, the default schedule's marked, also when
+        /// the output is not a terminal.
+        #[arg(long)]
+        all: bool,
+    },
     /// Benchmark a built-in scene (docs/benchmarks.md).
     Bench(BenchArgs),
     /// Simulate a scene and draw PNG frames (and optionally an animated GIF), no GPU needed.

@@ -104,7 +104,7 @@ pub fn execute(command: Command) -> Result<(), AppError> {
             in_pool(threads, || run::run(&args))
         }
         Command::Check { scene } => check::check(&scene),
-        Command::Systems => systems::list(),
+        Command::Systems { all } => systems::list(all),
         Command::Bench(args) => {
             let threads = args.threads;
             in_pool(threads, || bench::bench(&args))

@@ -21,10 +21,11 @@ const ABOUT: &[(&str, &str)] = &[
     ("integrate", "poses from velocities; angular momentum kept in free flight"),
 ];
 
-/// On a terminal, every shipped system with a line on each, the default schedule's marked;
-/// into a pipe, the default schedule's names one a line, for scripts (docs/cli.md).
-pub(super) fn list() -> Result<(), AppError> {
-    let lines = if std::io::stdout().is_terminal() {
+/// On a terminal (or with `--all`), every shipped system with a line on each, the default
+/// schedule's marked; into a pipe, the default schedule's names one a line, for scripts
+/// (docs/cli.md).
+pub(super) fn list(all: bool) -> Result<(), AppError> {
+    let lines = if all || std::io::stdout().is_terminal() {
         annotated()
     } else {
         DEFAULT_ORDER.iter().map(|n| (*n).to_string()).collect()
