@@ -102,9 +102,11 @@ pub struct BoundingSphere {
     pub radius: Scalar,
 }
 
-/// The actor's shared convex mesh, an index into the simulation's `MeshTable`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The actor's convex mesh, shared with every actor of the same shape.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Mesh {
-    /// Which mesh.
+    /// Its place in the simulation's `MeshTable` (the body arrays and exports refer to it).
     pub id: MeshId,
+    /// The mesh itself (body frame, about the centre of mass).
+    pub shape: std::sync::Arc<crate::model::mesh::ConvexMesh>,
 }

@@ -105,7 +105,7 @@ impl Sim {
             mass,
             def.material,
             BoundingSphere { radius: mesh.radius },
-            Mesh { id: def.mesh },
+            Mesh { id: def.mesh, shape: self.ctx.meshes.get_arc(def.mesh) },
         ))
     }
 
