@@ -1,0 +1,394 @@
+//! The four-lane kernel against the reference, and exact cases.
+
+use super::PairRows;
+use crate::math::{Mat3, Quat, Scalar, Vector};
+use crate::solver::constraints::{couple_pairs, friction_patch, place_group, tangents};
+use crate::solver::{
+    Constraint, ConstraintGroup, ContactPoint, Friction, HeldPair, Softness, SolverBody, kernel, reference,
+};
+use proptest::prelude::*;
+use proptest::sample::Index;
+
+/// The kernel's copy of `pairs`: placed in batches by the solver's own `place_group` (and
+/// so `place`), each constraint and point written into its lane as `fill` writes them.
+fn lay_out(pairs: &[PairRows], static_slot: u32) -> ConstraintGroup {
+    let mut group = ConstraintGroup { static_slot, ..ConstraintGroup::default() };
+    group.slots.extend(pairs.iter().map(|p| p.constraint.slot));
+    let held: Vec<HeldPair> =
+        pairs.iter().map(|p| HeldPair { pair: 0, group: 0, batch: 0, lane: 0, len: p.points.len() as u8 }).collect();
+    place_group(&held, 0, &mut group);
+    for (pair, &(batch, lane)) in pairs.iter().zip(&group.placed) {
+        let batch = &mut group.batches[batch as usize];
+        batch.set(usize::from(lane), &pair.constraint);
+        for (j, point) in pair.points.iter().enumerate() {
+            group.points[batch.first as usize + j].set(usize::from(lane), point);
+        }
+    }
+    group
+}
+
+/// One pass (or body step) of a substep plan, run on both solvers.
+#[derive(Clone, Copy, Debug)]
+enum Step {
+    Warm,
+    Solve,
+    Move,
+    Relax,
+    Restitution,
+}
+
+/// Two substeps as `solve` plans them (two solve sweeps in the first; gravity's pushes left
+/// out), then restitution.
+const PLAN: [Step; 10] = {
+    use Step::*;
+    [Warm, Solve, Solve, Move, Relax, Warm, Solve, Move, Relax, Restitution]
+};
+
+/// Runs `step` on the kernel's batches and on the reference's pairs.
+fn run(
+    step: Step,
+    kernel_side: (&mut [SolverBody], &mut ConstraintGroup),
+    reference_side: (&mut [SolverBody], &mut [PairRows]),
+    h: Scalar,
+    threshold: Scalar,
+) {
+    let ((kb, group), (rb, pairs)) = (kernel_side, reference_side);
+    let soft = Softness::new(h);
+    match step {
+        Step::Warm => {
+            kernel::warm_start(kb, &group.batches, &mut group.points);
+            reference::warm_start(rb, pairs);
+        }
+        Step::Solve => {
+            kernel::sweep(kb, &mut group.batches, &mut group.points, h, Some(soft));
+            reference::sweep(rb, pairs, h, Some(soft));
+        }
+        Step::Relax => {
+            kernel::sweep(kb, &mut group.batches, &mut group.points, h, None);
+            reference::sweep(rb, pairs, h, None);
+        }
+        Step::Restitution => {
+            kernel::restitution(kb, &group.batches, &mut group.points, threshold);
+            reference::restitution(rb, pairs, threshold);
+        }
+        Step::Move => {
+            for bodies in [kb, rb] {
+                let free = bodies.len() - 1;
+                for b in &mut bodies[..free] {
+                    b.dx += b.v * h;
+                    b.dq += b.w * h;
+                }
+            }
+        }
+    }
+}
+
+/// Where the kernel's and the reference's results differ in any bit: every body's
+/// velocities, every point's accumulated and largest impulses, every friction impulse, and
+/// the idle points of a batch (a lane's beyond its own count), which must stay zero.
+fn differences(kb: &[SolverBody], group: &ConstraintGroup, rb: &[SolverBody], pairs: &[PairRows]) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut same = |what: String, k: Scalar, r: Scalar| {
+        if k.to_bits() != r.to_bits() {
+            out.push(format!("{what}: kernel {k:e}, reference {r:e}"));
+        }
+    };
+    for (slot, (k, r)) in kb.iter().zip(rb).enumerate() {
+        for axis in 0..3 {
+            same(format!("body {slot} v[{axis}]"), k.v[axis], r.v[axis]);
+            same(format!("body {slot} w[{axis}]"), k.w[axis], r.w[axis]);
+        }
+    }
+    for (i, (pair, &(batch, lane))) in pairs.iter().zip(&group.placed).enumerate() {
+        let (batch, lane) = (&group.batches[batch as usize], usize::from(lane));
+        for k in 0..3 {
+            same(
+                format!("pair {i} friction impulse {k}"),
+                batch.friction.impulse[k][lane],
+                pair.constraint.friction.impulse[k],
+            );
+        }
+        for j in 0..batch.len as usize {
+            let kernel = group.points[batch.first as usize + j].get(lane);
+            let reference = pair.points.get(j).copied().unwrap_or(ContactPoint::IDLE);
+            same(format!("pair {i} point {j} impulse"), kernel.impulse, reference.impulse);
+            same(format!("pair {i} point {j} max impulse"), kernel.max_impulse, reference.max_impulse);
+        }
+    }
+    out
+}
+
+fn vector(range: Scalar) -> impl Strategy<Value = Vector> {
+    (-range..range, -range..range, -range..range).prop_map(|(x, y, z)| Vector::new(x, y, z))
+}
+
+fn unit() -> impl Strategy<Value = Vector> {
+    vector(1.0).prop_filter("a direction", |n| n.length() > 0.1).prop_map(Vector::normalize)
+}
+
+fn rotation() -> impl Strategy<Value = Quat> {
+    (unit(), -3.0..3.0f64).prop_map(|(axis, angle)| Quat::from_axis_angle(axis, angle))
+}
+
+/// A free body: mass, principal moments and axes, position, and its solver state.
+#[derive(Clone, Debug)]
+struct BodySpec {
+    mass: Scalar,
+    moments: Vector,
+    axes: Quat,
+    position: Vector,
+    state: SolverBody,
+}
+
+fn body() -> impl Strategy<Value = BodySpec> {
+    let moments = (0.05..5.0f64, 0.05..5.0f64, 0.05..5.0f64).prop_map(|(a, b, c)| Vector::new(a, b, c));
+    let state =
+        (vector(3.0), vector(3.0), vector(0.02), vector(0.02)).prop_map(|(v, w, dx, dq)| SolverBody { v, w, dx, dq });
+    (0.2..5.0f64, moments, rotation(), vector(2.0), state).prop_map(|(mass, moments, axes, position, state)| BodySpec {
+        mass,
+        moments,
+        axes,
+        position,
+        state,
+    })
+}
+
+/// A manifold point: its offset from the pair's centre, gap, approach speed and warm start.
+#[derive(Clone, Debug)]
+struct PointSpec {
+    offset: Vector,
+    gap: Scalar,
+    approach: Scalar,
+    impulse: Scalar,
+}
+
+fn point() -> impl Strategy<Value = PointSpec> {
+    (vector(0.5), -0.06..0.03f64, -4.0..1.0f64, prop_oneof![Just(0.0), 0.0..3.0f64])
+        .prop_map(|(offset, gap, approach, impulse)| PointSpec { offset, gap, approach, impulse })
+}
+
+/// A held pair: its two bodies (`ground` 0: B is the static slot, 1: A is, else both free
+/// when there are two bodies), normal, centre, points, material and friction warm start.
+#[derive(Clone, Debug)]
+struct PairSpec {
+    a: Index,
+    b: Index,
+    ground: u8,
+    normal: Vector,
+    centre: Vector,
+    points: Vec<PointSpec>,
+    mu: Scalar,
+    friction: [Scalar; 3],
+    restitution: Scalar,
+    slop: Scalar,
+    max_push: Scalar,
+}
+
+fn pair() -> impl Strategy<Value = PairSpec> {
+    let material = (
+        prop_oneof![Just(0.0), 0.05..1.2f64],
+        (-0.5..0.5f64, -0.5..0.5f64, -0.2..0.2f64),
+        prop_oneof![Just(0.0), 0.1..0.9f64],
+        0.0..0.01f64,
+        0.05..3.0f64,
+    );
+    (any::<Index>(), any::<Index>(), 0..4u8, unit(), vector(2.0), proptest::collection::vec(point(), 1..=4), material)
+        .prop_map(|(a, b, ground, normal, centre, points, (mu, (t1, t2, tw), restitution, slop, max_push))| PairSpec {
+            a,
+            b,
+            ground,
+            normal,
+            centre,
+            points,
+            mu,
+            friction: [t1, t2, tw],
+            restitution,
+            slop,
+            max_push,
+        })
+}
+
+/// The solver bodies (the static slot last) and the pairs' rows, built as
+/// `build_constraints` builds them: g = S (r × n) with S = (I⁻¹)^½, effective masses,
+/// couplings, friction patches; then the warm-start impulses.
+fn build(bodies: &[BodySpec], specs: &[PairSpec], h: Scalar) -> (Vec<SolverBody>, Vec<PairRows>) {
+    let static_slot = bodies.len();
+    let mut solver_bodies: Vec<SolverBody> = bodies.iter().map(|b| b.state).collect();
+    solver_bodies.push(SolverBody::default());
+    let scale_of = |i: usize| {
+        bodies.get(i).map_or(Mat3::ZERO, |b| {
+            let r = Mat3::from_quat(b.axes);
+            r * Mat3::from_diagonal(b.moments.map(|m| 1.0 / m.sqrt())) * r.transpose()
+        })
+    };
+    let inv_mass_of = |i: usize| bodies.get(i).map_or(0.0, |b| 1.0 / b.mass);
+    let position_of = |i: usize| bodies.get(i).map_or(Vector::ZERO, |b| b.position);
+    let compliance = Softness::new(h).compliance;
+    let pairs = specs
+        .iter()
+        .map(|s| {
+            let a = s.a.index(bodies.len());
+            let other = if bodies.len() > 1 { (a + 1 + s.b.index(bodies.len() - 1)) % bodies.len() } else { a };
+            let slot = match s.ground {
+                0 => [a, static_slot],
+                1 => [static_slot, a],
+                _ if bodies.len() > 1 => [a, other],
+                _ => [a, static_slot],
+            };
+            let (n, inv_mass, scale, position) =
+                (s.normal, slot.map(inv_mass_of), slot.map(scale_of), slot.map(position_of));
+            let mut points: Vec<ContactPoint> = s
+                .points
+                .iter()
+                .map(|p| {
+                    let at = s.centre + p.offset;
+                    let g = [0, 1].map(|end| scale[end] * (at - position[end]).cross(n));
+                    let k = inv_mass[0] + inv_mass[1] + g[0].length_squared() + g[1].length_squared();
+                    ContactPoint {
+                        g,
+                        mass: 1.0 / k,
+                        k,
+                        impulse: p.impulse,
+                        gap: p.gap,
+                        approach: p.approach,
+                        ..ContactPoint::IDLE
+                    }
+                })
+                .collect();
+            couple_pairs(&mut points, inv_mass, compliance);
+            let centre = s.points.iter().map(|p| s.centre + p.offset).sum::<Vector>() / s.points.len() as Scalar;
+            for (point, spec) in points.iter_mut().zip(&s.points) {
+                point.lever = (s.centre + spec.offset - centre).length();
+            }
+            let tangents = tangents(n);
+            let friction = if s.mu > 0.0 {
+                let patch = friction_patch(centre, position, n, tangents, inv_mass, scale, None);
+                Friction { impulse: s.friction, ..patch }
+            } else {
+                Friction::IDLE
+            };
+            let constraint = Constraint {
+                slot: slot.map(|i| i as u32),
+                normal: n,
+                tangents,
+                inv_mass,
+                mu: s.mu,
+                restitution: s.restitution,
+                slop: s.slop,
+                max_push: s.max_push,
+                friction,
+            };
+            PairRows { constraint, points }
+        })
+        .collect();
+    (solver_bodies, pairs)
+}
+
+/// Runs `PLAN` on both solvers from the same start; the first pass after which they differ
+/// and how, if any.
+fn compare(bodies: &[BodySpec], specs: &[PairSpec], h: Scalar, threshold: Scalar) -> Result<(), String> {
+    let (mut rb, mut pairs) = build(bodies, specs, h);
+    let mut kb = rb.clone();
+    let mut group = lay_out(&pairs, bodies.len() as u32);
+    for (k, step) in PLAN.into_iter().enumerate() {
+        run(step, (&mut kb, &mut group), (&mut rb, &mut pairs), h, threshold);
+        let diff = differences(&kb, &group, &rb, &pairs);
+        if !diff.is_empty() {
+            return Err(format!(
+                "after step {k} ({step:?}), {} differences: {:#?}",
+                diff.len(),
+                &diff[..diff.len().min(8)]
+            ));
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// The four-lane kernel, on random constraints placed in batches as the solver places
+    /// them, gives the bits of the plain one-at-a-time reference: every pass of two
+    /// substeps and restitution, soft, speculative and rigid rows, blocks and single
+    /// points, friction, bodies shared between constraints and the static slot.
+    #[test]
+    fn the_kernel_gives_the_bits_of_solving_the_constraints_one_at_a_time(
+        bodies in proptest::collection::vec(body(), 1..9),
+        pairs in proptest::collection::vec(pair(), 1..20),
+        h in 1.0 / 480.0..1.0 / 60.0f64,
+        threshold in 0.3..2.0f64,
+    ) {
+        let result = compare(&bodies, &pairs, h, threshold);
+        prop_assert!(result.is_ok(), "{}", result.unwrap_err());
+    }
+}
+
+/// A lone body, mass 2, and the static slot under it; one point on the normal through its
+/// centre (no lever), so K = 1/m and one rigid row stops the body.
+fn falling_body(v: Scalar, gap: Scalar) -> (Vec<SolverBody>, Vec<PairRows>) {
+    let body = SolverBody { v: Vector::new(0.0, v, 0.0), ..SolverBody::default() };
+    let point = ContactPoint { mass: 2.0, k: 0.5, gap, ..ContactPoint::IDLE };
+    let constraint = Constraint { slot: [0, 1], inv_mass: [0.5, 0.0], ..Constraint::idle(1) };
+    (vec![body, SolverBody::default()], vec![PairRows { constraint, points: vec![point] }])
+}
+
+/// Runs one relax sweep (rigid rows) of substep `h` on both solvers; returns each one's
+/// body velocity and point impulse.
+fn relax_both(bodies: &[SolverBody], pairs: &[PairRows], h: Scalar) -> [(Vector, Scalar); 2] {
+    let (mut kb, mut rb, mut pairs) = (bodies.to_vec(), bodies.to_vec(), pairs.to_vec());
+    let mut group = lay_out(&pairs, bodies.len() as u32 - 1);
+    run(Step::Relax, (&mut kb, &mut group), (&mut rb, &mut pairs), h, 1.0);
+    [(kb[0].v, group.points[0].impulse[0]), (rb[0].v, pairs[0].points[0].impulse)]
+}
+
+#[test]
+fn a_body_landing_on_the_static_slot_takes_m_v_and_stops() {
+    let (bodies, pairs) = falling_body(-3.0, 0.0);
+    for (v, impulse) in relax_both(&bodies, &pairs, 1.0 / 240.0) {
+        assert_eq!(impulse, 6.0, "m v = 2 kg · 3 m/s");
+        assert_eq!(v, Vector::ZERO);
+    }
+}
+
+#[test]
+fn an_open_gap_lets_a_body_close_it_in_one_substep_and_no_faster() {
+    // Gap 0.25 m, substep 0.125 s: the row allows 2 m/s of approach.
+    let (bodies, pairs) = falling_body(-3.0, 0.25);
+    for (v, impulse) in relax_both(&bodies, &pairs, 0.125) {
+        assert_eq!(impulse, 2.0, "2 kg · (3 − 2) m/s");
+        assert_eq!(v, Vector::new(0.0, -2.0, 0.0));
+    }
+    let (bodies, pairs) = falling_body(-1.0, 0.25);
+    for (v, impulse) in relax_both(&bodies, &pairs, 0.125) {
+        assert_eq!(impulse, 0.0, "slower than the gap allows: no impulse");
+        assert_eq!(v, Vector::new(0.0, -1.0, 0.0));
+    }
+}
+
+#[test]
+fn a_box_landing_flat_on_two_corners_stops_without_spin() {
+    // Mass 1, S = identity, corners at r = (±1, −1, 0) from the centre, normal +y: g = r × n
+    // = (0, 0, ±1), K₀₀ = K₁₁ = 2, K₀₁ = 1 − 1 = 0, det K = 4. The block gives each corner
+    // half of m v; one Gauss–Seidel sweep would leave the box spinning.
+    let n = Vector::Y;
+    let corner = |x: Scalar| {
+        let g = [Vector::new(x, -1.0, 0.0).cross(n), Vector::ZERO];
+        ContactPoint { g, mass: 0.5, k: 2.0, ..ContactPoint::IDLE }
+    };
+    let mut points = vec![corner(1.0), corner(-1.0)];
+    couple_pairs(&mut points, [1.0, 0.0], Softness::new(0.01).compliance);
+    assert_eq!((points[0].coupling, points[0].inv_det[0]), (0.0, 0.25));
+    let constraint = Constraint { slot: [0, 1], inv_mass: [1.0, 0.0], ..Constraint::idle(1) };
+    let body = SolverBody { v: Vector::new(0.0, -4.0, 0.0), ..SolverBody::default() };
+    let bodies = [body, SolverBody::default()];
+    let pairs = [PairRows { constraint, points }];
+    let (mut kb, mut rb, mut reference_pairs) = (bodies.to_vec(), bodies.to_vec(), pairs.to_vec());
+    let mut group = lay_out(&pairs, 1);
+    run(Step::Relax, (&mut kb, &mut group), (&mut rb, &mut reference_pairs), 0.01, 1.0);
+    let kernel_impulses = [group.points[0].impulse[0], group.points[1].impulse[0]];
+    let reference_impulses = reference_pairs[0].points.iter().map(|p| p.impulse).collect::<Vec<_>>();
+    for (b, impulses) in [(kb[0], kernel_impulses.to_vec()), (rb[0], reference_impulses)] {
+        assert_eq!(impulses, [2.0, 2.0]);
+        assert_eq!((b.v, b.w), (Vector::ZERO, Vector::ZERO));
+    }
+}
