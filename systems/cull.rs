@@ -6,6 +6,7 @@
 use crate::collision::contact::Pair;
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
+use crate::solver::Joints;
 use hecs::World;
 use rayon::prelude::*;
 
@@ -20,7 +21,8 @@ pub fn spheres_overlap(xa: Vector, ra: Scalar, xb: Vector, rb: Scalar) -> bool {
 /// The paper's all-pairs broad phase: every pair (a < b) whose spheres overlap, skipping
 /// pairs of two fixed actors (they never move, so never need an impulse).
 ///
-/// - Reads: `ctx.bodies`. Writes: `ctx.pairs` (appends `Candidate`s, sorted), `ctx.stats`.
+/// - Reads: `ctx.bodies`, the joints (`Joints`: joined pairs are skipped). Writes: `ctx.pairs` (appends
+///   `Candidate`s, sorted), `ctx.stats`.
 /// - Paper: bounding box check; docs/physics.md §1.2, E1. Cost: O(N²).
 pub fn cull_all_pairs(_world: &mut World, ctx: &mut StepContext) {
     reach(ctx);
@@ -32,7 +34,16 @@ pub fn cull_all_pairs(_world: &mut World, ctx: &mut StepContext) {
             }
         }
     }
+    drop_jointed(ctx);
     ctx.stats.candidates = ctx.pairs.len();
+}
+
+/// Drops the pairs a joint joins without `collide` (docs/joints.md): a hinge's two halves
+/// overlap at the hinge by design.
+fn drop_jointed(ctx: &mut StepContext) {
+    if let Some(joints) = ctx.scratch.get::<Joints>().filter(|j| !j.no_collide.is_empty()) {
+        ctx.pairs.retain(|p| !joints.keeps_apart(p.a, p.b));
+    }
 }
 
 /// Fills `CullScratch::reach`: each bounding radius widened by the body's speculative
@@ -62,7 +73,7 @@ const CHUNK: usize = 256;
 /// Uniform-grid broad phase, the default: the same pairs, in the same order, as
 /// `cull_all_pairs`.
 ///
-/// - Reads: `ctx.bodies`. Writes: `ctx.pairs`, `ctx.stats`, its `CullScratch`.
+/// - Reads: `ctx.bodies`, the joints. Writes: `ctx.pairs`, `ctx.stats`, its `CullScratch`.
 /// - Paper: bounding box check (its all-pairs loop replaced; ARCHITECTURE.md says why a grid and
 ///   not sweep-and-prune: box-gas's slabs of equal cubes overlap on any one axis).
 /// - Cost: O(N) to bin, O(N·k) for k neighbours per body, plus O(N·L) for L large bodies.
@@ -93,6 +104,7 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
         ctx.pairs.extend(chunk.iter().map(|&(a, b)| Pair::candidate(a, b)));
     }
     s.reach = reach;
+    drop_jointed(ctx);
     ctx.stats.candidates = ctx.pairs.len();
 }
 

@@ -16,8 +16,9 @@
 //! stack's support from the ground up.
 //!
 //! It takes every contact under gravity (impacts bounce here, per point, after the substeps)
-//! and every contact with friction. Without gravity and friction it does nothing, so the
-//! paper's frictionless results, `resolve`'s, are unchanged. `correct` leaves the pairs held
+//! and every contact with friction, and solves the scene's joints in the same substeps
+//! (docs/joints.md). Without gravity, friction and joints it does nothing, so the paper's
+//! frictionless results, `resolve`'s, are unchanged. `correct` leaves the pairs held
 //! here alone.
 
 use crate::collision::contact::{Contact, Feature, Pair, PairState};
@@ -26,7 +27,7 @@ use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
 use crate::solver::{CachedManifold, ContactAnchors, SolveScratch};
-use crate::solver::{Pass, Softness, Step, build_constraints, drive};
+use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prepare_joints};
 use hecs::World;
 use rayon::prelude::*;
 
@@ -38,9 +39,9 @@ const RECYCLE_DISTANCE: Scalar = 0.005;
 /// Holds resting contacts, applies friction and bounces impacts (see the module docs).
 ///
 /// - Reads: `ctx.pairs` (`Candidate`, `Found`, `Resolved`), `ctx.posed`, `ctx.bodies`,
-///   its `SolveScratch`.
-/// - Writes: `ctx.bodies` velocities and the poses of the bodies it holds,
-///   `ctx.stats.impulses` (one per pair held), the warm-start cache.
+///   its `SolveScratch`, the joints (`Joints`, docs/joints.md).
+/// - Writes: `ctx.bodies` velocities and the poses of the bodies it holds or the joints hold,
+///   `ctx.stats.impulses` (one per pair held), the warm-start cache, the joints' impulses.
 /// - Paper: none (resting contact and friction are the paper's future work).
 /// - Cost: O(P) to find and build P points, O(P · substeps · (iterations + 2)) to solve.
 pub fn solve(_world: &mut World, ctx: &mut StepContext) {
@@ -51,18 +52,34 @@ pub fn solve(_world: &mut World, ctx: &mut StepContext) {
     s.pairs.clear();
     let open = |p: &Pair| p.contact().is_some() || p.is_candidate() || p.is_near();
     s.pairs.extend(ctx.pairs.iter().filter(|p| open(p) && resting(p)).copied());
-    if s.pairs.is_empty() {
+    // Joints run the substeps even with no contact to hold (and without gravity).
+    let mut joints = match ctx.scratch.get::<Joints>() {
+        Some(j) if !j.joints.is_empty() => std::mem::take(ctx.scratch.get_mut::<Joints>()),
+        _ => Joints::default(),
+    };
+    let s = ctx.scratch.get_mut::<SolveScratch>();
+    if s.pairs.is_empty() && joints.joints.is_empty() {
         s.cache.clear();
         s.held.clear();
         return;
+    }
+    s.jointed.clear();
+    for i in joints.joints.iter().flat_map(|j| std::iter::once(j.a).chain(j.b)) {
+        if !s.jointed.contains(&i) {
+            s.jointed.push(i);
+        }
     }
     ctx.pose_pairs(open);
     find_manifolds(ctx);
     build_constraints(ctx);
     let s = ctx.scratch.get_mut::<SolveScratch>();
     (ctx.stats.held, ctx.stats.split) = (s.held.len(), !s.groups[1].batches.is_empty());
-    substeps(ctx);
+    prepare_joints(&mut joints, &ctx.bodies, &s.slot, &s.scale, s.bodies.len() as u32 - 1);
+    substeps(ctx, &mut joints);
     remember(ctx);
+    if !joints.joints.is_empty() {
+        *ctx.scratch.get_mut::<Joints>() = joints;
+    }
 }
 
 /// Each pair's manifold: recycled from the previous step when the two bodies have hardly
@@ -197,7 +214,7 @@ fn placed(g: &ContactAnchors, b: &Bodies, ia: usize, ib: usize) -> Manifold {
 /// v·dt, so `solve` moves each body by the rest. Gravity's change of velocity, which the
 /// `gravity` system applied whole, is re-timed over the substeps (net change unchanged), so a
 /// stack's weight is carried substep by substep.
-fn substeps(ctx: &mut StepContext) {
+fn substeps(ctx: &mut StepContext, joints: &mut Joints) {
     let (params, dt) = (&ctx.params, ctx.dt);
     let (count, h) = (params.substeps.max(1), params.substep(dt));
     let soft = Softness::new(h);
@@ -209,7 +226,7 @@ fn substeps(ctx: &mut StepContext) {
         plan.extend([Step::Move(h), Step::Pass(Pass::Relax)]);
     }
     plan.push(Step::Pass(Pass::Restitution(params.restitution_threshold(dt))));
-    drive(s, &plan, h);
+    drive(s, &plan, h, joints);
     // Worked out in parallel (a rotation each), then written in place.
     let (b, left) = (&ctx.bodies, s.left);
     let after = |(k, &i): (usize, &u32)| {

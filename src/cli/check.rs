@@ -18,5 +18,13 @@ pub(super) fn check(path: &Path) -> Result<(), AppError> {
     if sim.len() > 20 {
         outln!("  ... and {} more", sim.len() - 20);
     }
+    if let Some(joints) = sim.ctx.scratch.get::<crate::solver::Joints>().filter(|j| !j.joints.is_empty()) {
+        outln!("{} joints", joints.joints.len());
+        for j in &joints.joints {
+            let b = j.b.map_or("the world", |b| sim.names()[b as usize].as_str());
+            let collide = if j.collide { " (colliding)" } else { "" };
+            outln!("  {}: {} joining {} to {b}{collide}", j.name, j.kind.name(), sim.names()[j.a as usize]);
+        }
+    }
     Ok(())
 }

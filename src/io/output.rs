@@ -4,6 +4,7 @@
 
 use crate::collision::contact::Feature;
 use crate::sim::{ActorState, Sim, totals};
+use crate::solver::Joints;
 use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
@@ -33,7 +34,39 @@ struct StateJson<'a> {
     actors: Vec<ActorJson<'a>>,
     totals: TotalsJson,
     contacts: serde_json::Map<String, serde_json::Value>,
+    /// Absent without joints, so scenes without them write what they always did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    joints: Option<Vec<JointJson<'a>>>,
     state_hash: String,
+}
+
+/// A joint and how far it is from holding (docs/joints.md).
+#[derive(Serialize)]
+struct JointJson<'a> {
+    name: &'a str,
+    kind: &'static str,
+    a: &'a str,
+    b: Option<&'a str>,
+    /// [m].
+    position_error: f64,
+    /// [rad].
+    angle_error: f64,
+}
+
+/// The joints' section of the final state, or `None` for a scene without joints.
+fn joints_json<'a>(sim: &'a Sim, actors: &[ActorState]) -> Option<Vec<JointJson<'a>>> {
+    let joints = sim.ctx.scratch.get::<Joints>().filter(|j| !j.joints.is_empty())?;
+    let poses: Vec<_> = actors.iter().map(|a| (a.pose.position, a.pose.orientation)).collect();
+    let names = sim.names();
+    let rows = joints.joints.iter().zip(joints.errors(&poses)).map(|(j, (position_error, angle_error))| JointJson {
+        name: &j.name,
+        kind: j.kind.name(),
+        a: &names[j.a as usize],
+        b: j.b.map(|b| names[b as usize].as_str()),
+        position_error,
+        angle_error,
+    });
+    Some(rows.collect())
 }
 
 /// The final-state document of docs/cli.md (plus `state_hash`, see `state_hash`).
@@ -62,6 +95,7 @@ pub fn state_json(sim: &Sim, actors: &[ActorState]) -> String {
             kinetic_energy: t.kinetic_energy,
         },
         contacts,
+        joints: joints_json(sim, actors),
         state_hash: format!("{:016x}", state_hash(actors)),
     };
     serde_json::to_string_pretty(&doc).expect("plain data serialises")

@@ -62,6 +62,7 @@ pub fn build(scene: &SceneDef, path: &Path) -> Result<Sim, SceneError> {
     };
     let mut sim = Sim::new(scene.dt, params, schedule);
     spawn_all(&mut sim, &instances(scene, path)?, path)?;
+    crate::scene::joints::build_joints(scene, &mut sim, path)?;
     Ok(sim)
 }
 

@@ -1,8 +1,10 @@
 //! Scenes: the RON format and its checks, spawners that expand into many actors, the
-//! benchmark scenes, OBJ models, building a `Sim` from a scene, and start-of-run warnings.
+//! benchmark scenes, OBJ models, joints, building a `Sim` from a scene, and start-of-run
+//! warnings.
 
 pub mod benchmarks;
 pub mod instantiate;
+pub mod joints;
 pub mod obj;
 mod schema;
 pub mod spawners;

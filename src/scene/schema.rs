@@ -51,6 +51,9 @@ pub struct SceneDef {
     /// Camera for `rigid render` (default: fitted to the scene).
     #[serde(default)]
     pub camera: Option<CameraDef>,
+    /// Joints between actors, or an actor and the world (docs/joints.md).
+    #[serde(default)]
+    pub joints: Vec<crate::scene::joints::JointDef>,
 }
 
 /// A camera for `rigid render`.
@@ -352,6 +355,7 @@ pub fn ron_options() -> ron::Options {
 pub fn parse(text: &str, path: &Path) -> Result<SceneDef, SceneError> {
     let scene: SceneDef = ron_options().from_str(text).map_err(|e| parse_error(e, text, path))?;
     check_scene(&scene, path)?;
+    crate::scene::joints::check_references(&scene, text, path)?;
     Ok(scene)
 }
 
@@ -399,6 +403,9 @@ fn parse_error(e: ron::error::SpannedError, text: &str, path: &Path) -> SceneErr
     // An actor without a name is reported by its place in the list.
     if let Some(rest) = message.strip_prefix("actor: ") {
         message = format!("{}: {rest}", unnamed_actor(text, offset));
+    }
+    if let Some(rest) = message.strip_prefix("joint: ") {
+        message = format!("{}: {rest}", crate::scene::joints::unnamed_joint(text, offset));
     }
     // RON's type errors ("Expected float") do not say where; name the field being read.
     if let ron::Error::ExpectedFloat

@@ -292,12 +292,12 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
     // hold the static slot there, so the mark is a value no slot takes). Their numbering
     // changes no result (it only tells bodies apart), so it is the order they come in.
     const MARKED: u32 = u32::MAX - 1;
-    for &(_, k) in &s.order {
-        for i in [s.pairs[k as usize].a, s.pairs[k as usize].b] {
-            if !b.is_fixed(i as usize) && s.slot[i as usize] != MARKED {
-                s.slot[i as usize] = MARKED;
-                s.moving.push(i);
-            }
+    // The joints' bodies after the contacts' (none in a scene without joints).
+    let ends = s.order.iter().flat_map(|&(_, k)| [s.pairs[k as usize].a, s.pairs[k as usize].b]);
+    for i in ends.chain(s.jointed.iter().copied()) {
+        if !b.is_fixed(i as usize) && s.slot[i as usize] != MARKED {
+            s.slot[i as usize] = MARKED;
+            s.moving.push(i);
         }
     }
     s.left = s.moving.len();
@@ -322,11 +322,9 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
     for (k, &i) in s.moving.iter().enumerate() {
         s.slot[i as usize] = if (k as u32) < left { k as u32 } else { k as u32 + 1 };
     }
-    for pair in &s.pairs {
-        for i in [pair.a, pair.b] {
-            if b.is_fixed(i as usize) {
-                s.slot[i as usize] = last;
-            }
+    for i in s.pairs.iter().flat_map(|p| [p.a, p.b]).chain(s.jointed.iter().copied()) {
+        if b.is_fixed(i as usize) {
+            s.slot[i as usize] = last;
         }
     }
     // S and S⁻¹; for equal principal moments (cubes, spheres) multiples of the identity,

@@ -1,6 +1,7 @@
 //! Carrying out the substeps' plan over the constraint groups, on one thread or two.
 
-use super::{BodyStore, Sides, Softness, SolverBody};
+use super::joint_pass::{JointPass, joint_pass};
+use super::{BodyStore, Joints, Sides, Softness, SolverBody};
 use crate::math::{Scalar, Vector};
 use crate::solver::{ConstraintGroup, SolveScratch};
 
@@ -57,7 +58,9 @@ fn apply(step: Step, side: &mut [SolverBody]) {
 /// awake through the step (`schedule`), takes the second side at once, and when it is busy or
 /// off its core (a machine loaded with other work) this thread runs both sides itself instead
 /// of waiting. Either way the arithmetic is the same, so the result does not depend on threads.
-pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar) {
+/// After each pass over the contacts, the joints (if any) take theirs, in scene order, over
+/// both sides' bodies (`joint_pass`): joints and contacts converge together.
+pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut Joints) {
     let [first, second, across] = &mut s.groups;
     let (left, right) = s.bodies.split_at_mut(s.left + 1);
     let threaded = !second.batches.is_empty() && rayon::current_num_threads() > 1;
@@ -75,6 +78,15 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar) {
         }
         if !across.batches.is_empty() {
             run(pass, &mut Sides { left: &mut *left, right: &mut *right }, across, h);
+        }
+        let joint = match pass {
+            Pass::Warm => Some(JointPass::Warm),
+            Pass::Solve(_) => Some(JointPass::Solve),
+            Pass::Relax => Some(JointPass::Relax),
+            Pass::Restitution(_) => None,
+        };
+        if let Some(joint) = joint.filter(|_| !joints.joints.is_empty()) {
+            joint_pass(&mut Sides { left: &mut *left, right: &mut *right }, joints, joint, h);
         }
     }
 }

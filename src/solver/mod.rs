@@ -1,7 +1,8 @@
 //! The contact solver: the `solve` system's manifolds become one `Constraint` per held pair and
 //! one `ContactPoint` per manifold point (`build`), solved as a "soft step" (Catto,
 //! "Solver2D", 2024; Box2D v3; rapier's TGS) by the passes of `kernel`, carried out on one
-//! thread or two by `drive`.
+//! thread or two by `drive`. The scene's joints (`joints`: what they hold) are solved in the
+//! same substeps, a pass over them after each pass over the contacts (`joint_pass`).
 //!
 //! Layout, for speed: the bodies a step's contacts touch are gathered into a dense
 //! `SolverBody` array (fixed bodies share a static slot of zeros, so no branch asks which end
@@ -28,6 +29,8 @@ use crate::math::{Scalar, Vector};
 
 mod constraints;
 mod drive;
+mod joint_pass;
+mod joints;
 mod kernel;
 mod lanes;
 #[cfg(test)]
@@ -36,6 +39,8 @@ mod scratch;
 
 pub(crate) use constraints::build_constraints;
 pub(crate) use drive::{Pass, Step, drive};
+pub(crate) use joint_pass::prepare as prepare_joints;
+pub use joints::{Frame, Joint, JointImpulses, JointKind, Joints, Motor, Spring};
 pub use kernel::{restitution, sweep, warm_start};
 pub use lanes::{Batch, FrictionRows, LaneVectors, Lanes, PointRows};
 pub use scratch::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, SolveScratch};

@@ -131,4 +131,7 @@ pub struct SolveScratch {
     pub speculative: Vec<Scalar>,
     /// S = (I⁻¹)^½ in world axes of each solver body (zero for the static slots).
     pub scale: Vec<Mat3>,
+    /// The actors the joints hold, each once, in order of first mention (empty without
+    /// joints): they get solver bodies whether or not they touch anything.
+    pub jointed: Vec<u32>,
 }
