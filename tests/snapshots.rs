@@ -64,6 +64,17 @@ fn resume_under_gravity_keeps_the_contact_solver_and_sleeping_state() {
 }
 
 #[test]
+fn jointed_runs_resume_bit_for_bit() {
+    // Joints are warm-started from last substep's impulses: the snapshot carries them.
+    let dir = tempfile::tempdir().expect("temp dir");
+    for scene in ["double-pendulum.ron", "chain.ron"] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene);
+        let snap = resumes_exactly(&dir, path.to_str().expect("utf-8"), 30);
+        assert!(!snap["joints"].as_array().expect("joint impulses").is_empty(), "{scene}");
+    }
+}
+
+#[test]
 fn a_snapshot_with_a_pulling_contact_impulse_is_bad_input() {
     let dir = tempfile::tempdir().expect("temp dir");
     let scene = dir.path().join("drop.ron");

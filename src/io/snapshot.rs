@@ -9,7 +9,7 @@ use crate::math::{Quat, Vector};
 use crate::model::components::{Pose, Velocity};
 use crate::sim::Sim;
 use crate::sim::context::SleepState;
-use crate::solver::{CachedManifold, ContactAnchors, SolveScratch};
+use crate::solver::{CachedManifold, ContactAnchors, JointImpulses, Joints, SolveScratch};
 use serde::{Deserialize, Serialize};
 
 /// Version of the snapshot format; a reader refuses other versions.
@@ -94,6 +94,10 @@ pub struct Snapshot {
     /// Sleeping's state (absent: every body awake and never still).
     #[serde(default)]
     pub sleep: Option<SleepSnapshot>,
+    /// Each joint's warm-start impulses, in scene order: point [3], angular [3], axial, lower
+    /// and upper limit, motor (absent: a scene without joints).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub joints: Vec<[f64; 10]>,
 }
 
 impl Snapshot {
@@ -124,6 +128,11 @@ impl Snapshot {
                 s.cache.iter().map(|&((a, b), ref c)| ContactSnapshot::of([a, b], c)).collect()
             }),
             sleep: (!sim.ctx.sleep.still.is_empty()).then(|| SleepSnapshot::of(&sim.ctx.sleep)),
+            joints: sim
+                .ctx
+                .scratch
+                .get::<Joints>()
+                .map_or_else(Vec::new, |j| j.impulses.iter().map(joint_row).collect()),
         }
     }
 
@@ -161,6 +170,13 @@ impl Snapshot {
             Some(s) => s.state(n)?,
             None => SleepState::default(),
         };
+        let joint_count = sim.ctx.scratch.get::<Joints>().map_or(0, |j| j.joints.len());
+        if !self.joints.is_empty() && self.joints.len() != joint_count {
+            return Err(format!("joints: {} rows for a scene of {joint_count} joints", self.joints.len()));
+        }
+        if let Some(k) = self.joints.iter().position(|r| !finite(r)) {
+            return Err(format!("joints[{k}]: not finite"));
+        }
         let mut query = sim.world.query::<(&crate::model::components::ActorIndex, &mut Pose, &mut Velocity)>();
         for (index, pose, vel) in query.iter() {
             let s = &self.actors[index.0 as usize];
@@ -173,7 +189,28 @@ impl Snapshot {
         sim.impulses = self.contacts;
         sim.ctx.scratch.get_mut::<SolveScratch>().cache = cache;
         sim.ctx.sleep = sleep;
+        if !self.joints.is_empty() {
+            let joints = sim.ctx.scratch.get_mut::<Joints>();
+            joints.impulses = self.joints.iter().map(|r| joint_impulses(r)).collect();
+        }
         Ok(())
+    }
+}
+
+/// A joint's impulses as a snapshot row.
+fn joint_row(j: &JointImpulses) -> [f64; 10] {
+    let [p, a] = [j.point.to_array(), j.angular.to_array()];
+    [p[0], p[1], p[2], a[0], a[1], a[2], j.axial, j.limits[0], j.limits[1], j.motor]
+}
+
+/// A snapshot row as a joint's impulses.
+fn joint_impulses(r: &[f64; 10]) -> JointImpulses {
+    JointImpulses {
+        point: Vector::new(r[0], r[1], r[2]),
+        angular: Vector::new(r[3], r[4], r[5]),
+        axial: r[6],
+        limits: [r[7], r[8]],
+        motor: r[9],
     }
 }
 
