@@ -41,6 +41,24 @@ pub enum Command {
     Render(RenderArgs),
     /// Simulate a scene and write it as an animated binary glTF 2.0 file.
     Export(ExportArgs),
+    /// Serve a web page that shows the scene running in 3-D, live, with a JSON API (docs/studio.md).
+    Studio(StudioArgs),
+}
+
+/// `rigid studio`.
+#[derive(Debug, Args)]
+pub struct StudioArgs {
+    /// Scene file (RON); the built-in demo scene when omitted.
+    pub scene: Option<PathBuf>,
+    /// Port to listen on; 0 picks a free one (the address is printed).
+    #[arg(long, default_value_t = 7878)]
+    pub port: u16,
+    /// Address to listen on (loopback by default; anything else is reachable from the network).
+    #[arg(long, default_value = "127.0.0.1")]
+    pub host: String,
+    /// Do not try to open a browser; only print the address.
+    #[arg(long)]
+    pub no_open: bool,
 }
 
 /// The scene and its length, shared by `render` and `export`.

@@ -8,6 +8,7 @@ mod export;
 mod plot;
 mod render;
 mod run;
+mod studio;
 mod systems;
 
 use crate::cli::args::{Command, SceneArgs};
@@ -111,6 +112,7 @@ pub fn execute(command: Command) -> Result<(), AppError> {
         }
         Command::Render(args) => in_pool(args.scene.threads, || render::render(&args)),
         Command::Export(args) => in_pool(args.scene.threads, || export::export(&args)),
+        Command::Studio(args) => studio::studio(&args),
     }
 }
 

@@ -1,0 +1,442 @@
+// rigid studio: draws the running scene from /api/meshes (once per scene version) and
+// /api/frame (7 little-endian f32 per actor: position, quaternion x y z w), and drives the
+// JSON API (docs/studio.md). URL parameters, for scripts and tests:
+//   ?play=1                       start playing once loaded
+//   ?script=add-box,step:5,...    run actions in order once loaded: play, pause, reset,
+//                                 step:N, add-box, add-sphere, add-cylinder, untick:NAME,
+//                                 tick:NAME, wait:MS, scene:RON-TEXT (last: it may hold commas)
+
+import * as THREE from './three.module.min.js';
+import { OrbitControls } from './OrbitControls.js';
+
+const $ = (id) => document.getElementById(id);
+const params = new URLSearchParams(location.search);
+
+function showError(message) {
+  $('error').textContent = message || '';
+}
+
+async function api(path, body, json = true) {
+  const init = body === undefined ? {} : {
+    method: 'POST',
+    headers: { 'Content-Type': json ? 'application/json' : 'text/plain' },
+    body: json ? JSON.stringify(body) : body,
+  };
+  const r = await fetch(path, init);
+  const v = await r.json().catch(() => ({}));
+  if (!r.ok) {
+    const message = v.error || `${r.status} ${r.statusText}`;
+    showError(message);
+    throw new Error(message);
+  }
+  showError('');
+  return v;
+}
+
+// ---- three.js scene ----------------------------------------------------------------------
+
+const canvas = $('viewport');
+let renderer = null;
+try {
+  renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+  renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+} catch (e) {
+  showError(`WebGL is not available: ${e.message}`);
+}
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x2b3038);
+const camera = new THREE.PerspectiveCamera(45, 1, 0.05, 2000);
+camera.position.set(6, 5, 8);
+const controls = renderer ? new OrbitControls(camera, canvas) : null;
+scene.add(new THREE.HemisphereLight(0xffffff, 0x445566, 1.6));
+const sun = new THREE.DirectionalLight(0xffffff, 1.8);
+sun.position.set(5, 10, 7);
+scene.add(sun);
+let grid = new THREE.GridHelper(20, 20, 0x8899aa, 0x4a5260);
+scene.add(grid);
+scene.add(new THREE.AxesHelper(1));
+const marker = new THREE.Mesh(new THREE.RingGeometry(0.15, 0.25, 24), new THREE.MeshBasicMaterial({ color: 0xffcc33, side: THREE.DoubleSide }));
+marker.rotation.x = -Math.PI / 2;
+marker.visible = false;
+scene.add(marker);
+
+// Per (mesh, fixed) group: one InstancedMesh; for actor i, groupOf[i] = [group, instance].
+let groups = [];
+let groupOf = [];
+let version = -1;
+let lastFrame = null;
+let fitted = '';
+let sceneName = '';
+let loadingMeshes = false;
+
+function flatGeometry(mesh) {
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.Float32BufferAttribute(mesh.vertices, 3));
+  g.setIndex(mesh.triangles);
+  const flat = g.toNonIndexed();
+  flat.computeVertexNormals();
+  g.dispose();
+  return flat;
+}
+
+async function loadMeshes() {
+  loadingMeshes = true;
+  try {
+    const m = await api('/api/meshes');
+    for (const g of groups) {
+      scene.remove(g.object);
+      g.object.dispose();
+    }
+    const geometries = m.meshes.map(flatGeometry);
+    const byKey = new Map();
+    groupOf = m.actors.map((a) => {
+      const key = `${a.mesh}/${a.fixed}`;
+      if (!byKey.has(key)) byKey.set(key, { mesh: a.mesh, fixed: a.fixed, members: [] });
+      const g = byKey.get(key);
+      g.members.push(a);
+      return [g, g.members.length - 1];
+    });
+    groups = [...byKey.values()];
+    for (const g of groups) {
+      const material = g.fixed
+        ? new THREE.MeshLambertMaterial({ color: 0xa0a0a8, transparent: true, opacity: 0.35, depthWrite: false })
+        : new THREE.MeshLambertMaterial({ color: 0xffffff });
+      g.object = new THREE.InstancedMesh(geometries[g.mesh], material, g.members.length);
+      g.object.instanceMatrix.setUsage(THREE.DynamicDrawUsage);
+      g.object.frustumCulled = false;
+      if (!g.fixed) {
+        const c = new THREE.Color();
+        g.members.forEach((a, k) => {
+          c.setRGB(a.colour[0] / 255, a.colour[1] / 255, a.colour[2] / 255, THREE.SRGBColorSpace);
+          g.object.setColorAt(k, c);
+        });
+      }
+      scene.add(g.object);
+    }
+    version = m.version;
+  } finally {
+    loadingMeshes = false;
+  }
+}
+
+const m4 = new THREE.Matrix4();
+const pos = new THREE.Vector3();
+const quat = new THREE.Quaternion();
+const one = new THREE.Vector3(1, 1, 1);
+
+function applyFrame(f) {
+  const n = Math.min(groupOf.length, f.length / 7);
+  for (let i = 0; i < n; i++) {
+    const [g, k] = groupOf[i];
+    pos.set(f[7 * i], f[7 * i + 1], f[7 * i + 2]);
+    quat.set(f[7 * i + 3], f[7 * i + 4], f[7 * i + 5], f[7 * i + 6]);
+    m4.compose(pos, quat, one);
+    g.object.setMatrixAt(k, m4);
+  }
+  for (const g of groups) g.object.instanceMatrix.needsUpdate = true;
+}
+
+// Frames the scene: the free bodies (all bodies when none is free) from a three-quarter view.
+function fitCamera(f) {
+  const box = new THREE.Box3();
+  const anyFree = groupOf.some(([g]) => !g.fixed);
+  for (let i = 0; i < groupOf.length && 7 * i < f.length; i++) {
+    if (anyFree && groupOf[i][0].fixed) continue;
+    box.expandByPoint(new THREE.Vector3(f[7 * i], f[7 * i + 1], f[7 * i + 2]));
+  }
+  if (box.isEmpty()) return;
+  const centre = box.getCenter(new THREE.Vector3());
+  const size = Math.max(box.getSize(new THREE.Vector3()).length(), 6);
+  controls?.target.copy(centre);
+  camera.position.copy(centre).add(new THREE.Vector3(0.6, 0.45, 0.8).normalize().multiplyScalar(size * 1.6));
+  camera.near = size / 500;
+  camera.far = size * 50;
+  camera.updateProjectionMatrix();
+  scene.remove(grid);
+  const extent = Math.max(10, Math.ceil(size * 2));
+  grid = new THREE.GridHelper(extent, Math.min(extent, 100), 0x8899aa, 0x4a5260);
+  scene.add(grid);
+  controls?.update();
+}
+
+// Frames drawn from new server state per second, shown top left of the viewport.
+let fpsFrames = 0;
+let fpsSince = performance.now();
+function countFrame() {
+  fpsFrames++;
+  const now = performance.now();
+  if (now - fpsSince >= 1000) {
+    const fps = (fpsFrames * 1000) / (now - fpsSince);
+    $('hud').textContent = `${fps.toFixed(0)} frames/s`;
+    $('hud').dataset.fps = fps.toFixed(1);
+    fpsFrames = 0;
+    fpsSince = now;
+  }
+}
+
+let frameInFlight = false;
+async function fetchFrame() {
+  if (frameInFlight || loadingMeshes) return;
+  frameInFlight = true;
+  try {
+    const r = await fetch('/api/frame');
+    const buf = await r.arrayBuffer();
+    const v = Number(r.headers.get('X-Version'));
+    if (v !== version) {
+      await loadMeshes();
+      await pollState();
+    }
+    const f = new Float32Array(buf);
+    lastFrame = f;
+    applyFrame(f);
+    if (fitted !== sceneName + '/' + version && (fitted === '' || !fitted.startsWith(sceneName + '/'))) {
+      fitCamera(f);
+    }
+    fitted = sceneName + '/' + version;
+    const t = Number(r.headers.get('X-Time'));
+    const step = r.headers.get('X-Step');
+    $('time').textContent = `${t.toFixed(3)} s (step ${step})`;
+    $('time').dataset.time = String(t);
+    $('time').dataset.step = step;
+    $('actor-count').textContent = String(groupOf.length);
+    countFrame();
+  } catch (e) {
+    showError(`lost the studio: ${e.message}`);
+  } finally {
+    frameInFlight = false;
+  }
+}
+
+function resize() {
+  const w = canvas.clientWidth || 640;
+  const h = canvas.clientHeight || 480;
+  if (renderer && (canvas.width !== Math.round(w * renderer.getPixelRatio()) || canvas.height !== Math.round(h * renderer.getPixelRatio()))) {
+    renderer.setSize(w, h, false);
+    camera.aspect = w / h;
+    camera.updateProjectionMatrix();
+  }
+}
+
+function animate() {
+  fetchFrame();
+  resize();
+  controls?.update();
+  if (renderer) renderer.render(scene, camera);
+  requestAnimationFrame(animate);
+}
+
+// ---- state, schedule and timings ---------------------------------------------------------
+
+let schedule = [];
+let offered = [];
+
+function renderSystems() {
+  const box = $('systems');
+  const key = offered.join(',') + '|' + schedule.join(',');
+  if (box.dataset.key === key) return;
+  box.dataset.key = key;
+  box.replaceChildren();
+  for (const name of offered) {
+    const label = document.createElement('label');
+    label.className = 'sys';
+    const input = document.createElement('input');
+    input.type = 'checkbox';
+    // The attribute too, so a saved or dumped page shows the schedule.
+    input.defaultChecked = input.checked = schedule.includes(name);
+    input.dataset.testid = `system-${name}`;
+    input.setAttribute('data-testid', `system-${name}`);
+    input.addEventListener('change', () => postSchedule().catch(() => {}));
+    label.append(input, ` ${name}`);
+    box.append(label);
+  }
+}
+
+function postSchedule() {
+  const ticked = [...$('systems').querySelectorAll('input')]
+    .filter((i) => i.checked)
+    .map((i) => i.getAttribute('data-testid').slice('system-'.length));
+  return api('/api/schedule', { systems: ticked }).then(pollState);
+}
+
+function renderTimings(s) {
+  const rows = s.schedule.map((n) => [n, s.systems_ms[n] ?? 0]);
+  const max = Math.max(1e-9, ...rows.map((r) => r[1]));
+  const width = Math.max(...rows.map((r) => r[0].length), 4);
+  const lines = rows.map(([n, ms]) => {
+    const bar = '█'.repeat(Math.round((ms / max) * 16));
+    return `${n.padEnd(width)} ${ms.toFixed(3).padStart(7)} ${bar}`;
+  });
+  lines.push(`${'step'.padEnd(width)} ${s.step_ms.toFixed(3).padStart(7)}`);
+  if (s.running) lines.push(`${s.steps_per_second.toFixed(0)} steps/s`);
+  $('timings').textContent = lines.join('\n');
+}
+
+// The last minute of step times, one stacked bar per poll (a colour per system).
+const history = [];
+function systemHue(name) {
+  let h = 0;
+  for (const ch of name) h = (h * 31 + ch.charCodeAt(0)) % 360;
+  return h;
+}
+function renderChart(s) {
+  if (s.running || history.length === 0) history.push({ order: s.schedule, ms: s.systems_ms });
+  if (history.length > 120) history.shift();
+  const c = $('chart');
+  const g = c.getContext('2d');
+  if (!g) return;
+  g.clearRect(0, 0, c.width, c.height);
+  const totals = history.map((h) => h.order.reduce((a, n) => a + (h.ms[n] ?? 0), 0));
+  const max = Math.max(1e-6, ...totals);
+  const w = c.width / 120;
+  history.forEach((h, i) => {
+    let y = c.height;
+    for (const n of h.order) {
+      const px = ((h.ms[n] ?? 0) / max) * (c.height - 12);
+      g.fillStyle = `hsl(${systemHue(n)}, 60%, 60%)`;
+      g.fillRect(i * w, y - px, Math.max(w - 0.5, 1), px);
+      y -= px;
+    }
+  });
+  g.fillStyle = '#aab';
+  g.font = '10px sans-serif';
+  g.fillText(`max ${max.toFixed(2)} ms/step`, 2, 10);
+}
+
+async function pollState() {
+  const s = await fetch('/api/state?actors=0').then((r) => r.json());
+  sceneName = s.scene;
+  $('scene-name').textContent = s.scene;
+  $('contacts').textContent = String(s.contacts);
+  $('energy').textContent = s.energy.toPrecision(4);
+  schedule = s.schedule;
+  offered = s.systems;
+  renderSystems();
+  renderTimings(s);
+  renderChart(s);
+  const speed = $('speed');
+  if (document.activeElement !== speed && [...speed.options].some((o) => Number(o.value) === s.speed)) {
+    speed.value = [...speed.options].find((o) => Number(o.value) === s.speed).value;
+  }
+  $('play').disabled = s.running;
+  $('pause').disabled = !s.running;
+  if (s.error) showError(s.error);
+  return s;
+}
+
+// ---- controls -----------------------------------------------------------------------------
+
+const control = (body) => api('/api/control', body).then(pollState);
+$('play').onclick = () => control({ action: 'play' }).catch(() => {});
+$('pause').onclick = () => control({ action: 'pause' }).catch(() => {});
+$('step').onclick = () => control({ action: 'step', steps: 1 }).catch(() => {});
+$('reset').onclick = () => control({ action: 'reset' }).catch(() => {});
+$('speed').onchange = (e) => control({ action: 'speed', speed: Number(e.target.value) }).catch(() => {});
+
+$('scene-file').onchange = async (e) => {
+  const file = e.target.files[0];
+  if (!file) return;
+  fitted = '';
+  await api('/api/scene', await file.text(), false).then(pollState).catch(() => {});
+  e.target.value = '';
+};
+
+$('mesh-file').onchange = async (e) => {
+  const file = e.target.files[0];
+  if (!file) return;
+  const name = file.name.replace(/[^A-Za-z0-9._-]/g, '_').replace(/^\.+/, '') || 'mesh.obj';
+  try {
+    await api(`/api/mesh?name=${encodeURIComponent(name)}`, await file.text(), false);
+    await addActor(`Obj(path: "${name}", hull: true)`);
+  } catch (_) { /* shown in the error element */ }
+  e.target.value = '';
+};
+
+// Where new bodies drop: the clicked ground point, else above the centre of the bodies.
+let placeAt = null;
+function dropPoint() {
+  const f = lastFrame;
+  let top = 0;
+  const c = new THREE.Vector3();
+  let n = 0;
+  for (let i = 0; f && i < groupOf.length && 7 * i < f.length; i++) {
+    top = Math.max(top, f[7 * i + 1]);
+    if (!groupOf[i][0].fixed) {
+      c.x += f[7 * i];
+      c.z += f[7 * i + 2];
+      n++;
+    }
+  }
+  if (n) c.divideScalar(n);
+  if (placeAt) c.set(placeAt.x, 0, placeAt.z);
+  return [c.x, top + 2.0, c.z];
+}
+
+let added = 0;
+function addActor(shape) {
+  const [x, y, z] = dropPoint();
+  // Jitter a little so repeated adds do not stack exactly.
+  const j = () => ((added * 0.37) % 0.3) - 0.15;
+  added++;
+  const text = `Actor(shape: ${shape}, density: 500.0, position: (${(x + j()).toFixed(3)}, ${y.toFixed(3)}, ${(z - j()).toFixed(3)}), friction: 0.5)`;
+  return api('/api/actors', text, false).then(pollState);
+}
+const shapes = {
+  'add-box': 'Box(size: (1.0, 1.0, 1.0))',
+  'add-sphere': 'Icosphere(radius: 0.5, subdivisions: 2)',
+  'add-cylinder': 'Cylinder(radius: 0.5, height: 1.0, segments: 24)',
+};
+for (const [id, shape] of Object.entries(shapes)) $(id).onclick = () => addActor(shape).catch(() => {});
+
+// A click (not a drag) on the ground plane picks where new bodies drop.
+let down = null;
+canvas.addEventListener('pointerdown', (e) => { down = [e.clientX, e.clientY]; });
+canvas.addEventListener('pointerup', (e) => {
+  if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 4) return;
+  const rect = canvas.getBoundingClientRect();
+  const ndc = new THREE.Vector2(((e.clientX - rect.left) / rect.width) * 2 - 1, -((e.clientY - rect.top) / rect.height) * 2 + 1);
+  const ray = new THREE.Raycaster();
+  ray.setFromCamera(ndc, camera);
+  const hit = ray.ray.intersectPlane(new THREE.Plane(new THREE.Vector3(0, 1, 0), 0), new THREE.Vector3());
+  if (hit) {
+    placeAt = hit;
+    marker.position.set(hit.x, 0.01, hit.z);
+    marker.visible = true;
+  }
+});
+
+// ---- start ----------------------------------------------------------------------------------
+
+async function runScript(list) {
+  for (const item of list) {
+    const [what, arg] = item.split(':');
+    try {
+      if (what === 'play' || what === 'pause' || what === 'reset') await control({ action: what });
+      else if (what === 'step') await control({ action: 'step', steps: Number(arg || 1) });
+      else if (shapes[what]) await addActor(shapes[what]);
+      else if (what === 'scene') await api('/api/scene', item.slice('scene:'.length), false).then(pollState);
+      else if (what === 'untick' || what === 'tick') {
+        const box = document.querySelector(`[data-testid="system-${arg}"]`);
+        if (box) { box.checked = what === 'tick'; await postSchedule(); }
+      } else if (what === 'wait') await new Promise((r) => setTimeout(r, Number(arg || 100)));
+      // Let clicks' requests finish before the next action.
+      await new Promise((r) => setTimeout(r, 50));
+    } catch (_) { /* shown in the error element */ }
+  }
+  document.body.dataset.script = 'done';
+}
+
+async function start() {
+  await pollState();
+  await fetchFrame();
+  requestAnimationFrame(animate);
+  setInterval(() => pollState().catch(() => {}), 500);
+  const raw = params.get('script') || '';
+  // `scene:` takes the rest of the script, commas and all.
+  const at = raw.startsWith('scene:') ? 0 : raw.indexOf(',scene:') + 1;
+  const script = (at > 0 || raw.startsWith('scene:') ? raw.slice(0, Math.max(at - 1, 0)) : raw).split(',').filter(Boolean);
+  if (at > 0 || raw.startsWith('scene:')) script.push(raw.slice(at));
+  if (params.get('play') === '1') script.unshift('play');
+  await runScript(script);
+}
+
+start().catch((e) => showError(`cannot start: ${e.message}`));

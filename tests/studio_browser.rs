@@ -1,0 +1,199 @@
+//! `rigid studio`'s page in a real browser: Debian's `chromium`, headless, from the command line
+//! (no driver). The page reads URL parameters (`?play=1`, `?script=...`, docs/studio.md) to
+//! act without clicks; `--dump-dom` shows the result and `--screenshot` what was drawn.
+//! Needs Chromium (`CHROMIUM` names another binary): `.ci/run` installs it and runs
+//! `cargo test --test studio_browser -- --ignored`.
+
+use serde_json::Value;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+/// A running studio; killed when dropped, also when a test fails.
+struct Studio {
+    child: Child,
+    addr: String,
+}
+
+impl Drop for Studio {
+    /// Ctrl-C first, so the studio removes its upload folder; then, if need be, a kill.
+    fn drop(&mut self) {
+        let _ = Command::new("kill").args(["-INT", &self.child.id().to_string()]).status();
+        let deadline = std::time::Instant::now() + Duration::from_secs(2);
+        while std::time::Instant::now() < deadline {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn start(scene: &str) -> Studio {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rigid"))
+        .args(["studio", scene, "--port", "0", "--no-open"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("rigid starts");
+    let stdout = child.stdout.take().expect("stdout");
+    let mut studio = Studio { child, addr: String::new() };
+    let mut lines = BufReader::new(stdout).lines();
+    let line = lines.next().expect("a line").expect("utf-8");
+    let at = line.find("http://").unwrap_or_else(|| panic!("no address in {line:?}"));
+    studio.addr = line[at + "http://".len()..].trim_end_matches('/').to_string();
+    std::thread::spawn(move || lines.for_each(drop));
+    studio
+}
+
+fn state(studio: &Studio) -> Value {
+    let mut stream = TcpStream::connect(&studio.addr).expect("connect");
+    stream.set_read_timeout(Some(Duration::from_secs(20))).expect("timeout");
+    write!(stream, "GET /api/state HTTP/1.1\r\nHost: {}\r\nConnection: close\r\n\r\n", studio.addr).expect("write");
+    let mut response = String::new();
+    stream.read_to_string(&mut response).expect("read");
+    let (_, body) = response.split_once("\r\n\r\n").expect("headers end");
+    serde_json::from_str(body).expect("JSON")
+}
+
+/// Percent-encodes a URL query value.
+fn encode(text: &str) -> String {
+    text.bytes()
+        .map(|b| {
+            if b.is_ascii_alphanumeric() || b"-_.~".contains(&b) {
+                (b as char).to_string()
+            } else {
+                format!("%{b:02X}")
+            }
+        })
+        .collect()
+}
+
+/// Runs headless Chromium on `url` with `mode` (`--dump-dom` or `--screenshot=FILE`) after
+/// `budget_ms` of virtual time; returns stdout.
+fn chromium(url: &str, mode: &str, budget_ms: u32) -> String {
+    let profile = tempfile::tempdir().expect("temp dir");
+    let binary = std::env::var("CHROMIUM").unwrap_or_else(|_| "chromium".to_string());
+    let out = Command::new("timeout")
+        .arg("90")
+        .arg(binary)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--use-gl=swiftshader",
+            "--enable-unsafe-swiftshader",
+            "--no-first-run",
+            "--hide-scrollbars",
+            "--window-size=800,600",
+        ])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .arg(format!("--virtual-time-budget={budget_ms}"))
+        .arg(mode)
+        .arg(url)
+        .stderr(Stdio::null())
+        .output()
+        .expect("chromium runs (apt-get install chromium)");
+    assert!(out.status.success(), "chromium failed: {:?}", out.status);
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The text of the element with `data-testid="id"` in a dumped DOM, and its opening tag.
+fn element<'a>(dom: &'a str, id: &str) -> (&'a str, &'a str) {
+    let marker = format!("data-testid=\"{id}\"");
+    let at = dom.find(&marker).unwrap_or_else(|| panic!("no {id} in the page"));
+    let open = dom[..at].rfind('<').expect("tag start");
+    let end = at + dom[at..].find('>').expect("tag end");
+    let text_end = end + dom[end..].find('<').unwrap_or(dom.len() - end);
+    (&dom[open..=end], &dom[end + 1..text_end])
+}
+
+fn attribute(tag: &str, name: &str) -> Option<String> {
+    let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+    Some(tag[at..at + tag[at..].find('"')?].to_string())
+}
+
+#[test]
+#[ignore = "needs Chromium: .ci/run installs it and runs these"]
+fn the_page_has_every_control_and_time_advances() {
+    let s = start("scenes/box-drop.ron");
+    let dom = chromium(&format!("http://{}/?play=1", s.addr), "--dump-dom", 3000);
+    for id in [
+        "viewport",
+        "play",
+        "pause",
+        "step",
+        "reset",
+        "time",
+        "actor-count",
+        "scene-file",
+        "mesh-file",
+        "add-box",
+        "add-sphere",
+        "add-cylinder",
+        "timings",
+        "error",
+        "system-gravity",
+        "system-integrate",
+    ] {
+        element(&dom, id);
+    }
+    let (tag, text) = element(&dom, "time");
+    let time: f64 = attribute(tag, "data-time").and_then(|t| t.parse().ok()).expect("data-time");
+    assert!(time > 0.0, "time does not advance: {tag}{text}");
+    assert!(text.ends_with(')') && text.contains(" s (step "), "{text}");
+    assert_eq!(element(&dom, "actor-count").1, "2");
+    assert!(element(&dom, "timings").1.contains("integrate"), "{}", element(&dom, "timings").1);
+    assert_eq!(element(&dom, "error").1, "", "the page shows an error");
+    assert_eq!(state(&s)["running"], true);
+}
+
+#[test]
+#[ignore = "needs Chromium: .ci/run installs it and runs these"]
+fn the_viewport_draws_the_scene() {
+    let s = start("scenes/mixed-shapes.ron");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = dir.path().join("shot.png");
+    chromium(&format!("http://{}/?play=1", s.addr), &format!("--screenshot={}", png.display()), 3000);
+    let image = image::open(&png).expect("a PNG").to_rgb8();
+    assert_eq!(image.dimensions(), (800, 600));
+    // The viewport is right of the 270-pixel side panel.
+    let mut colours = std::collections::HashSet::new();
+    let mut saturated = 0;
+    for (_, _, p) in image.enumerate_pixels().filter(|(x, _, _)| *x >= 280) {
+        colours.insert(p.0);
+        let [r, g, b] = p.0.map(i32::from);
+        if r.max(g).max(b) - r.min(g).min(b) > 60 {
+            saturated += 1;
+        }
+    }
+    assert!(colours.len() > 50, "viewport looks blank: {} colours", colours.len());
+    // The actors are coloured; the background, grid and panel are grey.
+    assert!(saturated > 500, "no coloured bodies drawn ({saturated} coloured pixels)");
+}
+
+#[test]
+#[ignore = "needs Chromium: .ci/run installs it and runs these"]
+fn scripted_actions_reach_the_api_and_errors_show() {
+    let s = start("scenes/box-drop.ron");
+    let script = "add-box,add-sphere,add-cylinder,untick:gravity,step:5";
+    let dom = chromium(&format!("http://{}/?script={}", s.addr, encode(script)), "--dump-dom", 4000);
+    let st = state(&s);
+    assert_eq!(st["actors"].as_array().expect("actors").len(), 5, "{st}");
+    assert!(!st["schedule"].as_array().expect("schedule").iter().any(|n| n == "gravity"), "{st}");
+    assert_eq!(st["step"], 5);
+    assert_eq!(element(&dom, "actor-count").1, "5");
+    let (tag, _) = element(&dom, "system-gravity");
+    assert!(!tag.contains("checked"), "{tag}");
+    assert!(element(&dom, "system-integrate").0.contains("checked"));
+
+    // A bad scene: the page's error element shows the API's message with line:col.
+    let script = "scene:Scene(actors: [Actor(shape: Sphere)])";
+    let dom = chromium(&format!("http://{}/?script={}", s.addr, encode(script)), "--dump-dom", 3000);
+    let (_, error) = element(&dom, "error");
+    assert!(error.starts_with("&lt;studio&gt;:1:") || error.starts_with("<studio>:1:"), "{error}");
+    assert_eq!(state(&s)["actors"].as_array().expect("actors").len(), 5);
+}
