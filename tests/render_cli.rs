@@ -319,3 +319,23 @@ fn quiet_prints_nothing_on_stdout() {
         assert!(glb.exists());
     }
 }
+
+#[test]
+fn joints_are_drawn_where_there_are_any() {
+    // The joints' anchors are drawn in one colour no shaded body takes, at the anchor.
+    let marks = |scene: &str| {
+        let mut sim = sim_of(scene, |_| {});
+        sim.run(2).expect("finite");
+        let camera = Camera::fit(&sim);
+        let image = render(&sim, &camera, 320, 240, Overlay { contacts: false, solid_fixed: false });
+        let pixels: Vec<(u32, u32)> =
+            image.enumerate_pixels().filter(|(_, _, p)| p.0 == [40, 220, 230]).map(|(x, y, _)| (x, y)).collect();
+        (pixels, camera)
+    };
+    let (pixels, camera) = marks("pendulum.ron");
+    assert!(pixels.len() > 10, "a pendulum's pivot is marked: {} pixels", pixels.len());
+    let (px, py, _) = camera.project(rigid_sandbox::math::Vector::new(0.0, 2.0, 0.0), 320, 240).expect("in view");
+    let near = |&(x, y): &(u32, u32)| (f64::from(x) - px).abs() < 12.0 && (f64::from(y) - py).abs() < 12.0;
+    assert!(pixels.iter().all(near), "the marks are at the pivot ({px}, {py})");
+    assert!(marks("box-drop.ron").0.is_empty(), "no joints, no marks");
+}

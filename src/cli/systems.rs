@@ -15,7 +15,7 @@ const ABOUT: &[(&str, &str)] = &[
     ("edge", "the paper's edge test: edges crossing the other body"),
     ("gravity", "v += g·dt for every free body"),
     ("resolve", "the corrected impulse for each impact (no gravity, no friction)"),
-    ("solve", "resting contact, friction and impacts under gravity (the contact solver)"),
+    ("solve", "resting contact, friction, impacts under gravity, and joints (the contact solver)"),
     ("correct", "pushes remaining penetration out along the contact normal"),
     ("sleep", "still bodies stop being simulated until touched (off unless solver.sleep)"),
     ("integrate", "poses from velocities; angular momentum kept in free flight"),

@@ -1,5 +1,5 @@
 //! A small software renderer for `rigid render`: perspective camera, z-buffered flat-shaded
-//! triangles, a ground grid and axes, and an optional overlay of contacts. No GPU and no
+//! triangles, a ground grid and axes, the joints' anchors, and an optional overlay of contacts. No GPU and no
 //! window; `image` encodes the frames.
 
 use crate::collision::contact::{Contact, Pair};
@@ -266,6 +266,7 @@ pub fn render_with_contacts(
             canvas.triangle(camera, [a, b, c], Rgb(base.map(|k| (k * shade).min(255.0) as u8)));
         }
     }
+    draw_joints(sim, camera, &mut canvas);
     if overlay.contacts {
         let scale = (camera.target - camera.eye).length() * 0.04;
         for c in contacts {
@@ -282,6 +283,35 @@ pub fn render_with_contacts(
         }
     }
     canvas.image
+}
+
+/// Each joint's anchors (cyan crosses, joined by a line where they are apart: a rod, a rope,
+/// a spring), and a hinge's or slider's axis (magenta), drawn over the bodies.
+fn draw_joints(sim: &Sim, camera: &Camera, canvas: &mut Canvas) {
+    let Some(joints) = sim.ctx.scratch.get::<crate::solver::Joints>().filter(|j| !j.joints.is_empty()) else {
+        return;
+    };
+    let actors = sim.actors();
+    let to_world = |i: u32, p: Vector| {
+        let pose = &actors[i as usize].pose;
+        pose.position + pose.orientation * p
+    };
+    let scale = (camera.target - camera.eye).length() * 0.03;
+    let (cyan, magenta) = (Rgb([40, 220, 230]), Rgb([230, 60, 220]));
+    for joint in &joints.joints {
+        let on_a = to_world(joint.a, joint.anchor_a);
+        let on_b = joint.b.map_or(joint.anchor_b, |b| to_world(b, joint.anchor_b));
+        for p in [on_a, on_b] {
+            for axis in [Vector::X, Vector::Y, Vector::Z] {
+                canvas.line(camera, p - axis * scale * 0.4, p + axis * scale * 0.4, cyan, false);
+            }
+        }
+        canvas.line(camera, on_a, on_b, cyan, false);
+        if matches!(joint.kind, crate::solver::JointKind::Hinge { .. } | crate::solver::JointKind::Slider { .. }) {
+            let axis = actors[joint.a as usize].pose.orientation * joint.axis_a;
+            canvas.line(camera, on_a - axis * scale * 2.0, on_a + axis * scale * 2.0, magenta, false);
+        }
+    }
 }
 
 /// Colour and depth buffers.
