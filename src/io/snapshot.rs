@@ -191,7 +191,7 @@ impl Snapshot {
         sim.ctx.sleep = sleep;
         if !self.joints.is_empty() {
             let joints = sim.ctx.scratch.get_mut::<Joints>();
-            joints.impulses = self.joints.iter().map(|r| joint_impulses(r)).collect();
+            joints.impulses = self.joints.iter().map(joint_impulses).collect();
         }
         Ok(())
     }
