@@ -416,3 +416,25 @@ fn the_shipped_joint_scenes_keep_their_joints() {
         assert!(position < most && angle < most_angle, "{name}: {position} m, {angle} rad");
     }
 }
+
+#[test]
+fn the_pendulums_benchmark_scene_swings_on_its_joints_and_its_free_twin_falls() {
+    use rigid_sandbox::scene::benchmarks::{BenchScene, scene_sim};
+    let mut hung = scene_sim(BenchScene::Pendulums { jointed: true }, 9, 1);
+    let mut free = scene_sim(BenchScene::Pendulums { jointed: false }, 9, 1);
+    assert_eq!(
+        hung.actors().iter().map(|a| a.pose).collect::<Vec<_>>(),
+        free.actors().iter().map(|a| a.pose).collect::<Vec<_>>()
+    );
+    hung.run(60).expect("finite");
+    free.run(60).expect("finite");
+    let start = scene_sim(BenchScene::Pendulums { jointed: false }, 9, 1).actors();
+    for ((h, f), s) in hung.actors().iter().zip(free.actors()).zip(&start) {
+        // The free box falls as semi-implicit Euler says: y drops by g·dt²·n(n+1)/2.
+        let drop = 9.81 / 3600.0 * 60.0 * 61.0 / 2.0;
+        assert!((s.pose.position.y - f.pose.position.y - drop).abs() < 1e-9, "{}", f.name);
+        // The hung one stays its half length (0.3 m) from its pivot, 2 m up.
+        let pivot_y = 2.0;
+        assert!(h.pose.position.y < pivot_y && h.pose.position.y > pivot_y - 0.31, "{} at {}", h.name, h.pose.position);
+    }
+}

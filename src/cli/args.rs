@@ -184,8 +184,9 @@ impl Default for RunArgs {
 /// `rigid bench`.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Scene: `box-gas`, `pyramid`, `rain` or `hull-rain` (docs/benchmarks.md).
-    #[arg(value_parser = ["box-gas", "pyramid", "rain", "hull-rain"])]
+    /// Scene: `box-gas`, `pyramid`, `rain`, `hull-rain`, `pendulums` or `free-boxes`
+    /// (docs/benchmarks.md).
+    #[arg(value_parser = ["box-gas", "pyramid", "rain", "hull-rain", "pendulums", "free-boxes"])]
     pub scene: String,
     /// Body counts, comma-separated (box-gas, rain, hull-rain).
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=1_000_000))]

@@ -7,6 +7,7 @@ use crate::math::Vector;
 use crate::scene::benchmarks::{BenchScene, DEFAULT_HULL_RAIN_SUBDIVISIONS, rain_half_width, scene_sim};
 use crate::scene::spawners::box_gas_half_extent;
 use crate::sim::schedule::StepProfile;
+use crate::solver::Joints;
 use std::collections::BTreeMap;
 use std::time::Duration;
 
@@ -47,6 +48,9 @@ pub struct BenchResult {
     /// Pyramid: largest distance of any cube centre from its start [m].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_displacement_m: Option<f64>,
+    /// Pendulums: the largest joint position error at the end [m].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub joint_error_m: Option<f64>,
     /// Rain and hull-rain: bodies whose centre ended outside the container (or below the floor).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outside: Option<usize>,
@@ -113,10 +117,16 @@ pub fn run(
             let a = rain_half_width(size);
             (None, None, Some(end.iter().filter(|x| x.x.abs() > a || x.z.abs() > a || x.y < 0.0).count()))
         }
+        BenchScene::Pendulums { .. } => (None, None, None),
     };
+    let joint_error_m = sim.ctx.scratch.get::<Joints>().filter(|j| !j.joints.is_empty()).map(|j| {
+        let poses: Vec<_> = sim.actors().iter().map(|a| (a.pose.position, a.pose.orientation)).collect();
+        j.errors(&poses).iter().map(|e| e.0).fold(0.0, f64::max)
+    });
     Ok(BenchResult {
         scene: scene.name(),
         actors: cubes.len() as u32,
+        joint_error_m,
         base: (scene == BenchScene::Pyramid).then_some(size),
         subdivisions: match scene {
             BenchScene::HullRain { subdivisions } => Some(subdivisions),
@@ -164,6 +174,8 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), AppError> {
     let (scene, mut sizes) = match args.scene.as_str() {
         "pyramid" => (BenchScene::Pyramid, args.base.clone()),
         "rain" => (BenchScene::Rain, args.actors.clone()),
+        "pendulums" => (BenchScene::Pendulums { jointed: true }, args.actors.clone()),
+        "free-boxes" => (BenchScene::Pendulums { jointed: false }, args.actors.clone()),
         "hull-rain" => {
             let subdivisions = args.subdivisions.unwrap_or(DEFAULT_HULL_RAIN_SUBDIVISIONS);
             (BenchScene::HullRain { subdivisions }, args.actors.clone())

@@ -178,6 +178,34 @@ pub enum BenchScene {
         /// Subdivisions of the icosahedron, 0..=5 (S = 1 has 42 vertices, S = 2 has 162).
         subdivisions: u32,
     },
+    /// Boxes of 0.2 × 0.6 × 0.2 m on a 2 m lattice, each hung from the world by a ball joint at
+    /// its top end and let go 30° from hanging (`jointed`), or the same boxes falling free:
+    /// what joints cost against the same bodies without them (size = boxes).
+    Pendulums {
+        /// Joints on (`pendulums`) or off (`free-boxes`).
+        jointed: bool,
+    },
+}
+
+/// The pendulums scene (see `BenchScene::Pendulums`) as scene text: `n` boxes on a square
+/// lattice 2 m apart, each turned 30° about z, hung at the end that was on top.
+#[must_use]
+pub fn pendulums_text(n: u32, jointed: bool) -> String {
+    let side = (1..).find(|k: &u32| k * k >= n).unwrap_or(1);
+    let (half, angle) = (0.3, 30f64.to_radians());
+    let (mut actors, mut joints) = (String::new(), String::new());
+    for i in 0..n {
+        let (x, z) = (f64::from(i % side) * 2.0, f64::from(i / side) * 2.0);
+        // The pivot at (x, 2, z); the box's centre half its length below it, swung 30°.
+        let (cx, cy) = (x + half * angle.sin(), 2.0 - half * angle.cos());
+        actors += &format!(
+            "Actor(name: \"bob-{i}\", shape: Box(size: (0.2, 0.6, 0.2)), mass: 1.0, position: ({cx}, {cy}, {z}), rotation: (0.0, 0.0, 30.0)),\n"
+        );
+        if jointed {
+            joints += &format!("Ball(a: \"bob-{i}\", anchor: ({x}, 2.0, {z})),\n");
+        }
+    }
+    format!("Scene(dt: 0.016666666666666666, actors: [\n{actors}], joints: [\n{joints}])")
 }
 
 impl BenchScene {
@@ -189,6 +217,8 @@ impl BenchScene {
             Self::Pyramid => "pyramid",
             Self::Rain => "rain",
             Self::HullRain { .. } => "hull-rain",
+            Self::Pendulums { jointed: true } => "pendulums",
+            Self::Pendulums { jointed: false } => "free-boxes",
         }
     }
 
@@ -201,6 +231,8 @@ impl BenchScene {
             Self::HullRain { subdivisions } => {
                 rain_of(size, seed, &ShapeDef::Icosphere { radius: HULL_RAIN_RADIUS, subdivisions })
             }
+            // Built from scene text (`scene_sim`): joints come with the scene, not as instances.
+            Self::Pendulums { .. } => Vec::new(),
         }
     }
 
@@ -212,6 +244,7 @@ impl BenchScene {
             Self::BoxGas => 0..actors - 6,
             Self::Pyramid => 1..actors,
             Self::Rain | Self::HullRain { .. } => 5..actors,
+            Self::Pendulums { .. } => 0..actors,
         }
     }
 }
@@ -226,6 +259,11 @@ pub fn box_gas_sim(n: u32, seed: u64) -> Sim {
 /// A benchmark scene as a simulation: dt = 1/60, gravity −9.81 but none for box-gas.
 #[must_use]
 pub fn scene_sim(scene: BenchScene, size: u32, seed: u64) -> Sim {
+    if let BenchScene::Pendulums { jointed } = scene {
+        let (text, path) = (pendulums_text(size, jointed), Path::new(scene.name()));
+        let def = crate::scene::parse(&text, path).expect("the pendulums scene is valid");
+        return crate::scene::build(&def, path).expect("the pendulums scene builds");
+    }
     let gravity = if scene == BenchScene::BoxGas { Vector::ZERO } else { Vector::new(0.0, -9.81, 0.0) };
     let mut sim = Sim::new(1.0 / 60.0, Params { gravity, ..Params::default() }, crate::systems::default_schedule());
     spawn_all(&mut sim, &scene.instances(size, seed), Path::new(scene.name())).expect("benchmark scenes are valid");
