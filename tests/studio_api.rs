@@ -63,7 +63,28 @@ fn request(studio: &Studio, method: &str, path: &str, body: &[u8]) -> (u16, Vec<
     let split = response.windows(4).position(|w| w == b"\r\n\r\n").expect("headers end");
     let head = String::from_utf8_lossy(&response[..split]).to_string();
     let status = head.split(' ').nth(1).and_then(|s| s.parse().ok()).expect("status");
-    (status, response[split + 4..].to_vec())
+    let body = response[split + 4..].to_vec();
+    if head.to_ascii_lowercase().contains("transfer-encoding: chunked") {
+        (status, unchunk(&body))
+    } else {
+        (status, body)
+    }
+}
+
+/// The body of a chunked response (big bodies come so).
+fn unchunk(mut body: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    loop {
+        let line_end = body.windows(2).position(|w| w == b"\r\n").expect("chunk size line");
+        let size_text = String::from_utf8_lossy(&body[..line_end]).to_string();
+        let size = usize::from_str_radix(size_text.split(';').next().expect("size").trim(), 16).expect("hex size");
+        body = &body[line_end + 2..];
+        if size == 0 {
+            return out;
+        }
+        out.extend_from_slice(&body[..size]);
+        body = &body[size + 2..];
+    }
 }
 
 fn get(studio: &Studio, path: &str) -> Value {
@@ -272,10 +293,223 @@ fn frames_are_seven_floats_per_actor() {
     let (status, page) = request(&s, "GET", "/", b"");
     assert_eq!(status, 200);
     let page = String::from_utf8(page).expect("utf-8");
-    for id in ["viewport", "play", "pause", "step", "reset", "time", "actor-count", "scene-file", "mesh-file"] {
+    for id in [
+        "viewport",
+        "play",
+        "pause",
+        "step",
+        "reset",
+        "time",
+        "actor-count",
+        "scene-file",
+        "mesh-file",
+        "actor-name",
+        "actor-mass",
+        "actor-restitution",
+        "actor-friction",
+        "actor-velocity",
+        "actor-apply",
+        "save",
+    ] {
         assert!(page.contains(&format!("data-testid=\"{id}\"")), "page lacks {id}");
     }
     for script in ["/app.js", "/three.module.min.js", "/OrbitControls.js"] {
         assert_eq!(request(&s, "GET", script, b"").0, 200, "{script}");
     }
+}
+
+/// GET `path` as text.
+fn get_text(studio: &Studio, path: &str) -> String {
+    let (status, body) = request(studio, "GET", path, b"");
+    assert_eq!(status, 200, "GET {path}: {}", String::from_utf8_lossy(&body));
+    String::from_utf8(body).expect("utf-8")
+}
+
+fn actor<'a>(state: &'a Value, name: &str) -> &'a Value {
+    state["actors"].as_array().expect("actors").iter().find(|a| a["name"] == name).expect("the actor")
+}
+
+fn f64s(v: &Value) -> Vec<f64> {
+    v.as_array().expect("array").iter().map(|x| x.as_f64().expect("number")).collect()
+}
+
+/// Two boxes in free space, `a` flying at `b`: a heavier `a` pushes `b` harder.
+const COLLIDE: &str = "Scene(gravity: (0.0, 0.0, 0.0), actors: [\n\
+    Actor(name: \"a\", shape: Box(size: (1.0, 1.0, 1.0)), mass: 1.0, velocity: (2.0, 0.0, 0.0), restitution: 0.5),\n\
+    Actor(name: \"b\", shape: Box(size: (1.0, 1.0, 1.0)), mass: 1.0, position: (1.5, 0.0, 0.0), restitution: 0.5),\n\
+    Actor(name: \"wall\", shape: Box(size: (1.0, 1.0, 1.0)), position: (0.0, -5.0, 0.0), fixed: true),\n])";
+
+/// Steps `COLLIDE` 60 times with `a` of mass `mass` (edited when given); b's x velocity.
+fn push_b(mass: Option<f64>) -> f64 {
+    let s = start("scenes/box-drop.ron");
+    post_ok(&s, "/api/scene", COLLIDE);
+    if let Some(m) = mass {
+        let v = post_ok(&s, "/api/actor", &json!({"name": "a", "mass": m}).to_string());
+        assert_eq!(v["mass"].as_f64(), Some(m), "{v}");
+        assert_eq!(actor(&get(&s, "/api/state"), "a")["mass"].as_f64(), Some(m));
+    }
+    control(&s, json!({"action": "step", "steps": 60}));
+    let state = get(&s, "/api/state");
+    let (a, b) = (actor(&state, "a"), actor(&state, "b"));
+    let m_a = a["mass"].as_f64().expect("mass");
+    // Momentum is kept through the collision, with the edited mass.
+    let p = m_a * f64s(&a["velocity"])[0] + f64s(&b["velocity"])[0];
+    assert!((p - 2.0 * m_a).abs() < 1e-6, "momentum {p}, expected {}", 2.0 * m_a);
+    f64s(&b["velocity"])[0]
+}
+
+#[test]
+fn an_edited_mass_shows_in_the_state_and_changes_the_response() {
+    let equal = push_b(None);
+    let heavy = push_b(Some(10.0));
+    // Restitution 0.5: b leaves at 1.5 m/s from an equal a, at 1.5·10/11·2 from a ten times heavier.
+    assert!((equal - 1.5).abs() < 0.05, "equal masses: b at {equal} m/s");
+    assert!((heavy - 30.0 / 11.0).abs() < 0.05, "heavy a: b at {heavy} m/s");
+}
+
+#[test]
+fn edits_change_material_and_velocity_and_survive_a_reset() {
+    let s = start("scenes/box-drop.ron");
+    let v = post_ok(
+        &s,
+        "/api/actor",
+        r#"{"name": "box", "restitution": 0.25, "friction": 0.75, "velocity": [1.0, 0.0, -2.0]}"#,
+    );
+    assert_eq!(v["velocity"], json!([1.0, 0.0, -2.0]), "{v}");
+    let state = get(&s, "/api/state");
+    let b = actor(&state, "box");
+    assert_eq!(b["restitution"].as_f64(), Some(0.25));
+    assert_eq!(b["friction"].as_f64(), Some(0.75));
+    assert_eq!(b["velocity"], json!([1.0, 0.0, -2.0]));
+    assert_eq!(b["mass"].as_f64(), Some(1.0));
+    post_ok(&s, "/api/actor", r#"{"name": "box", "mass": 4.0}"#);
+    control(&s, json!({"action": "step", "steps": 5}));
+    control(&s, json!({"action": "reset"}));
+    let b = actor(&get(&s, "/api/state"), "box").clone();
+    assert_eq!(b["mass"].as_f64(), Some(4.0), "{b}");
+    assert_eq!(b["friction"].as_f64(), Some(0.75), "{b}");
+    assert_eq!(b["restitution"].as_f64(), Some(0.25), "{b}");
+    assert_eq!(b["velocity"], json!([1.0, 0.0, -2.0]), "{b}");
+    assert_eq!(b["position"], json!([0.0, 2.0, 0.0]), "{b}");
+    // An added actor rebuilds the scene: the edits stay.
+    post_ok(&s, "/api/actors", r#"Actor(name: "extra", shape: Box(size: (1.0, 1.0, 1.0)), position: (4.0, 2.0, 0.0))"#);
+    assert_eq!(actor(&get(&s, "/api/state"), "box")["mass"].as_f64(), Some(4.0));
+    // A loaded scene drops them.
+    post_ok(&s, "/api/scene", &std::fs::read_to_string("scenes/box-drop.ron").expect("scene"));
+    assert_eq!(actor(&get(&s, "/api/state"), "box")["mass"].as_f64(), Some(1.0));
+}
+
+#[test]
+fn bad_edits_are_refused_and_change_nothing() {
+    let s = start("scenes/box-drop.ron");
+    control(&s, json!({"action": "step", "steps": 3}));
+    let before = get(&s, "/api/state");
+    for (bad, says) in [
+        (r#"{"name": "nobody", "mass": 2.0}"#, "nobody"),
+        (r#"{"mass": 2.0}"#, "name"),
+        (r#"{"name": "box", "mass": -1.0}"#, "mass"),
+        (r#"{"name": "box", "mass": 0}"#, "mass"),
+        (r#"{"name": "box", "mass": "heavy"}"#, "mass"),
+        (r#"{"name": "box", "restitution": 1.5}"#, "restitution"),
+        (r#"{"name": "box", "friction": -0.1}"#, "friction"),
+        (r#"{"name": "box", "velocity": [1.0, 2.0]}"#, "velocity"),
+        (r#"{"name": "box", "velocity": [1.0, 2.0, "x"]}"#, "velocity"),
+        (r#"{"name": "box", "colour": "red"}"#, "colour"),
+        (r#"{"name": "box", "mass": 2.0, "friction": -1.0}"#, "friction"),
+        (r#"{"name": "floor", "mass": 2.0}"#, "fixed"),
+        (r#"{"name": "floor", "velocity": [0.0, 1.0, 0.0]}"#, "fixed"),
+        (r#"{"name": "box", "#, "JSON"),
+    ] {
+        let (status, v) = post(&s, "/api/actor", bad);
+        assert_eq!(status, 400, "{bad}: {v}");
+        let message = v["error"].as_str().unwrap_or_else(|| panic!("{bad}: no error in {v}"));
+        assert!(message.contains(says), "{bad}: {message}");
+    }
+    assert_eq!(get(&s, "/api/state")["actors"], before["actors"]);
+    // A fixed actor's material may change.
+    post_ok(&s, "/api/actor", r#"{"name": "floor", "friction": 0.9}"#);
+    assert_eq!(actor(&get(&s, "/api/state"), "floor")["friction"].as_f64(), Some(0.9));
+}
+
+/// Parses and builds saved scene text with the library; checks it against the studio's state.
+fn rebuild_matches(text: &str, state: &Value) -> rigid_sandbox::Sim {
+    let path = std::path::Path::new("saved.ron");
+    let def = rigid_sandbox::scene::parse(text, path).unwrap_or_else(|e| panic!("{e:?}\n{text}"));
+    let sim = rigid_sandbox::scene::build(&def, path).unwrap_or_else(|e| panic!("{e:?}"));
+    let running = state["actors"].as_array().expect("actors");
+    let rebuilt = sim.actors();
+    assert_eq!(rebuilt.len(), running.len());
+    for (a, r) in rebuilt.iter().zip(running) {
+        assert_eq!(a.name, r["name"].as_str().expect("name"));
+        let p = f64s(&r["position"]);
+        for (x, y) in a.pose.position.to_array().iter().zip(&p) {
+            assert!((x - y).abs() <= 1e-12, "{}: {:?} vs {p:?}", a.name, a.pose.position);
+        }
+        let q = f64s(&r["orientation"]);
+        let dot: f64 = a.pose.orientation.to_array().iter().zip(&q).map(|(x, y)| x * y).sum();
+        assert!(dot.abs() > 1.0 - 1e-12, "{}: orientation {:?} vs {q:?}", a.name, a.pose.orientation);
+        let v = f64s(&r["velocity"]);
+        for (x, y) in a.velocity.linear.to_array().iter().zip(&v) {
+            assert!((x - y).abs() <= 1e-12, "{}: velocity {:?} vs {v:?}", a.name, a.velocity.linear);
+        }
+        assert_eq!(a.mass.mass, r["mass"].as_f64().expect("mass"), "{}", a.name);
+        assert_eq!(a.mass.is_fixed(), r["fixed"].as_bool().expect("fixed"), "{}", a.name);
+    }
+    sim
+}
+
+#[test]
+fn the_saved_scene_rebuilds_where_the_bodies_are_now() {
+    // Spawners become actors; the OBJ shapes keep their files.
+    for scene in ["scenes/spawners.ron", "scenes/mixed-shapes.ron"] {
+        let s = start(scene);
+        control(&s, json!({"action": "step", "steps": 30}));
+        post_ok(
+            &s,
+            "/api/actors",
+            "Actor(shape: Cylinder(radius: 0.5, height: 1.0, segments: 12), position: (0.0, 8.0, 0.0))",
+        );
+        let text = get_text(&s, "/api/scene");
+        let state = get(&s, "/api/state");
+        rebuild_matches(&text, &state);
+        // `rigid check` accepts it too.
+        let dir = tempfile::tempdir().expect("temp dir");
+        let file = dir.path().join("scene.ron");
+        std::fs::write(&file, &text).expect("write");
+        let out = Command::new(env!("CARGO_BIN_EXE_rigid")).arg("check").arg(&file).output().expect("rigid check");
+        assert!(out.status.success(), "{scene}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+}
+
+#[test]
+fn a_saved_scene_keeps_edits_and_reloads() {
+    let s = start("scenes/box-drop.ron");
+    post_ok(&s, "/api/actor", r#"{"name": "box", "mass": 3.5, "friction": 0.2, "velocity": [0.5, 1.0, 0.0]}"#);
+    control(&s, json!({"action": "step", "steps": 12}));
+    let text = get_text(&s, "/api/scene");
+    let state = get(&s, "/api/state");
+    let sim = rebuild_matches(&text, &state);
+    let def = rigid_sandbox::scene::parse(&text, std::path::Path::new("saved.ron")).expect("parses");
+    let b = def.actors.iter().find(|a| a.name.as_deref() == Some("box")).expect("box");
+    assert_eq!(b.mass, rigid_sandbox::scene::MassSpec::Mass(3.5));
+    assert_eq!(b.friction, 0.2);
+    assert!(sim.actors().iter().any(|a| a.name == "box" && a.mass.mass == 3.5));
+    // Loaded back into the studio, it starts where it was saved.
+    post_ok(&s, "/api/scene", &text);
+    let reloaded = get(&s, "/api/state");
+    assert_eq!(reloaded["step"], 0);
+    assert_eq!(names(&reloaded), ["floor", "box"]);
+    let b = actor(&reloaded, "box");
+    assert_eq!(b["position"], actor(&state, "box")["position"]);
+    assert_eq!(b["mass"].as_f64(), Some(3.5));
+    assert_eq!(b["friction"].as_f64(), Some(0.2));
+}
+
+#[test]
+fn scenes_with_joints_are_not_saved() {
+    let s = start("scenes/pendulum.ron");
+    let (status, body) = request(&s, "GET", "/api/scene", b"");
+    assert_eq!(status, 409);
+    let v: Value = serde_json::from_slice(&body).expect("JSON");
+    assert!(v["error"].as_str().expect("error").contains("joints"), "{v}");
 }

@@ -197,3 +197,34 @@ fn scripted_actions_reach_the_api_and_errors_show() {
     assert!(error.starts_with("&lt;studio&gt;:1:") || error.starts_with("<studio>:1:"), "{error}");
     assert_eq!(state(&s)["actors"].as_array().expect("actors").len(), 5);
 }
+
+#[test]
+#[ignore = "needs Chromium: .ci/run installs it and runs these"]
+fn a_clicked_actor_is_selected_and_edited() {
+    let s = start("scenes/box-drop.ron");
+    // The camera frames the free box: a click at the viewport's centre picks it.
+    let script = "click:0.5/0.5,edit:mass=2.5,edit:friction=0.3,edit:velocity=1 0 -1,edit:restitution=7";
+    let dom = chromium(&format!("http://{}/?script={}", s.addr, encode(script)), "--dump-dom", 4000);
+    assert_eq!(element(&dom, "actor-name").1, "box");
+    let st = state(&s);
+    let b = &st["actors"][1];
+    assert_eq!(b["name"], "box");
+    assert_eq!(b["mass"].as_f64(), Some(2.5), "{b}");
+    assert_eq!(b["friction"].as_f64(), Some(0.3), "{b}");
+    assert_eq!(b["velocity"], serde_json::json!([1.0, 0.0, -1.0]), "{b}");
+    // The refused restitution leaves the old one and shows the API's message.
+    assert_eq!(b["restitution"].as_f64(), Some(0.0), "{b}");
+    assert!(element(&dom, "error").1.contains("restitution"), "{}", element(&dom, "error").1);
+    assert_eq!(attribute(element(&dom, "actor-mass").0, "value").as_deref(), Some("2.5"));
+    for id in ["actor-restitution", "actor-friction", "actor-velocity", "actor-apply", "save"] {
+        element(&dom, id);
+    }
+
+    // Selecting by name; a fixed actor's mass and velocity cannot be edited.
+    let script = "select:floor,save";
+    let dom = chromium(&format!("http://{}/?script={}", s.addr, encode(script)), "--dump-dom", 3000);
+    assert_eq!(element(&dom, "actor-name").1, "floor");
+    assert!(element(&dom, "actor-mass").0.contains("disabled"), "{}", element(&dom, "actor-mass").0);
+    assert!(!element(&dom, "actor-friction").0.contains("disabled"), "{}", element(&dom, "actor-friction").0);
+    assert!(dom.contains("data-saved=\"// Saved by rigid studio"), "the page did not fetch the saved scene");
+}

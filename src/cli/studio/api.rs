@@ -1,7 +1,7 @@
 //! The studio's HTTP API and its static files (docs/studio.md lists every route).
 
-use super::{POSTED_NAME, Shared, Studio, build_sim, clean_error, lock};
-use crate::model::components::{ActorIndex, MassProps, Mesh, Name, Pose, Velocity};
+use super::{POSTED_NAME, Shared, Studio, build_sim, clean_error, lock, save};
+use crate::model::components::{ActorIndex, MassProps, Material, Mesh, Name, Pose, Velocity};
 use crate::scene::{ActorDef, ShapeDef};
 use serde_json::{Value, json};
 use std::collections::HashMap;
@@ -53,12 +53,22 @@ pub(super) fn handle(mut request: Request, shared: &Shared) {
         (Method::Get, "/api/state") => Reply::json(200, &state(&lock(shared), !query.contains("actors=0"))),
         (Method::Get, "/api/frame") => frame(&lock(shared)),
         (Method::Get, "/api/meshes") => Reply::json(200, &meshes(&lock(shared))),
+        (Method::Get, "/api/scene") => match save::scene_ron(&lock(shared)) {
+            Ok(text) => Reply {
+                status: 200,
+                kind: "application/ron; charset=utf-8",
+                body: text.into_bytes(),
+                headers: vec![("Content-Disposition", "attachment; filename=\"scene.ron\"".to_string())],
+            },
+            Err(e) => Reply::error(409, e),
+        },
         (Method::Post, _) => match read_body(&mut request) {
             Err(e) => Reply::error(400, e),
             Ok(body) => match route {
                 "/api/control" => control(shared, &body),
                 "/api/scene" => post_scene(shared, &body),
                 "/api/actors" => post_actor(shared, &body),
+                "/api/actor" => edit_actor(shared, &body),
                 "/api/schedule" => post_schedule(shared, &body),
                 "/api/mesh" => post_mesh(shared, query, &body),
                 _ => Reply::error(404, format!("no such route: POST {route}")),
@@ -106,14 +116,27 @@ fn offered_systems(s: &Studio) -> Vec<String> {
 fn state(s: &Studio, with_actors: bool) -> Value {
     let sim = &s.sim;
     let all = if with_actors { sim.actors() } else { Vec::new() };
+    let mut materials = vec![None; all.len()];
+    if with_actors {
+        for (i, m) in sim.world.query::<(&ActorIndex, &Material)>().iter() {
+            if let Some(slot) = materials.get_mut(i.0 as usize) {
+                *slot = Some(*m);
+            }
+        }
+    }
     let actors: Vec<Value> = all
         .iter()
-        .map(|a| {
+        .zip(&materials)
+        .map(|(a, m)| {
             json!({
                 "name": a.name,
                 "position": a.pose.position.to_array(),
                 "orientation": a.pose.orientation.to_array(),
                 "velocity": a.velocity.linear.to_array(),
+                "angular_velocity": a.velocity.angular.to_array(),
+                "mass": a.mass.mass,
+                "restitution": m.map(|m| m.restitution),
+                "friction": m.map(|m| m.friction),
                 "fixed": a.mass.is_fixed(),
             })
         })
@@ -263,6 +286,7 @@ fn post_scene(shared: &Shared, body: &str) -> Reply {
     s.sim = sim;
     s.version += 1;
     s.error = None;
+    s.edits.clear();
     Reply::json(200, &json!({"ok": true, "actors": s.sim.len()}))
 }
 
@@ -299,6 +323,7 @@ fn post_actor(shared: &Shared, body: &str) -> Reply {
         Ok(sim) => sim,
         Err(e) => return Reply::error(400, e),
     };
+    s.apply_edits(&mut sim);
     // Existing actors keep their poses and velocities; the clock goes on.
     let old: HashMap<String, (Pose, Velocity)> =
         s.sim.world.query::<(&Name, &Pose, &Velocity)>().iter().map(|(n, p, v)| (n.0.clone(), (*p, *v))).collect();
@@ -314,6 +339,36 @@ fn post_actor(shared: &Shared, body: &str) -> Reply {
     s.sim = sim;
     s.version += 1;
     Reply::json(200, &json!({"ok": true, "actors": s.sim.len()}))
+}
+
+/// `POST /api/actor`: edits one actor of the running scene in place and records the edit.
+fn edit_actor(shared: &Shared, body: &str) -> Reply {
+    let v = match parse_json(body) {
+        Ok(v) => v,
+        Err(r) => return r,
+    };
+    let (name, edit) = match save::ActorEdit::from_json(&v) {
+        Ok(e) => e,
+        Err(e) => return Reply::error(400, e),
+    };
+    let mut s = lock(shared);
+    if let Err(e) = save::apply(&mut s.sim, &name, &edit) {
+        return Reply::error(400, e);
+    }
+    s.record_edit(&name, edit);
+    let actor = s.sim.actors().into_iter().find(|a| a.name == name);
+    let material = s.sim.world.query::<(&Name, &Material)>().iter().find(|(n, _)| n.0 == name).map(|(_, m)| *m);
+    Reply::json(
+        200,
+        &json!({
+            "ok": true,
+            "name": name,
+            "mass": actor.as_ref().map(|a| a.mass.mass),
+            "velocity": actor.as_ref().map(|a| a.velocity.linear.to_array()),
+            "restitution": material.map(|m| m.restitution),
+            "friction": material.map(|m| m.friction),
+        }),
+    )
 }
 
 fn post_schedule(shared: &Shared, body: &str) -> Reply {

@@ -4,7 +4,11 @@
 //   ?play=1                       start playing once loaded
 //   ?script=add-box,step:5,...    run actions in order once loaded: play, pause, reset,
 //                                 step:N, add-box, add-sphere, add-cylinder, untick:NAME,
-//                                 tick:NAME, wait:MS, scene:RON-TEXT (last: it may hold commas)
+//                                 tick:NAME, wait:MS, select:NAME (as a click on it),
+//                                 click:FX/FY (a click at fractions of the viewport),
+//                                 edit:FIELD=VALUE (mass, restitution, friction or velocity
+//                                 as "x y z"; posted at once), save (fetch /api/scene into
+//                                 body[data-saved]), scene:RON-TEXT (last: it may hold commas)
 
 import * as THREE from './three.module.min.js';
 import { OrbitControls } from './OrbitControls.js';
@@ -185,6 +189,7 @@ async function fetchFrame() {
     if (v !== version) {
       await loadMeshes();
       await pollState();
+      if (selected) select(selected).catch(() => {});
     }
     const f = new Float32Array(buf);
     lastFrame = f;
@@ -387,22 +392,125 @@ const shapes = {
 };
 for (const [id, shape] of Object.entries(shapes)) $(id).onclick = () => addActor(shape).catch(() => {});
 
-// A click (not a drag) on the ground plane picks where new bodies drop.
+// ---- selecting and editing an actor ------------------------------------------------------
+
+let selected = null;
+const fields = ['mass', 'restitution', 'friction', 'velocity'];
+
+function setField(id, value, enabled) {
+  const input = $(id);
+  // The attribute too, so a dumped page shows the value.
+  input.defaultValue = input.value = value;
+  input.disabled = !enabled;
+}
+
+// Selects actor `name` (null: none) and fills the fields from /api/state.
+async function select(name) {
+  selected = name;
+  $('actor-name').textContent = name ?? 'none';
+  $('actor-apply').disabled = !name;
+  if (!name) {
+    for (const f of fields) setField(`actor-${f}`, '', false);
+    return null;
+  }
+  const s = await fetch('/api/state').then((r) => r.json());
+  const a = s.actors.find((x) => x.name === name);
+  // Gone with a new scene: nothing is selected.
+  if (!a) return select(null);
+  setField('actor-mass', String(a.mass), !a.fixed);
+  setField('actor-restitution', String(a.restitution), true);
+  setField('actor-friction', String(a.friction), true);
+  setField('actor-velocity', a.velocity.map((v) => Number(v.toPrecision(6))).join(' '), !a.fixed);
+  return a;
+}
+
+// The edit in field `f`'s input as the API wants it (undefined when empty).
+function fieldValue(f) {
+  const text = $(`actor-${f}`).value.trim();
+  if (text === '') return undefined;
+  if (f === 'velocity') return text.split(/[\s,;]+/).filter(Boolean).map(Number);
+  return Number(text);
+}
+
+// Posts the fields named in `which` (default: every enabled one) for the selected actor.
+async function applyEdit(which) {
+  if (!selected) return;
+  const body = { name: selected };
+  for (const f of which || fields) {
+    if (!which && $(`actor-${f}`).disabled) continue;
+    const v = fieldValue(f);
+    if (v !== undefined) body[f] = v;
+  }
+  await api('/api/actor', body);
+  await select(selected);
+  await pollState();
+}
+$('actor-apply').onclick = () => applyEdit().catch(() => {});
+
+async function saveScene() {
+  const r = await fetch('/api/scene');
+  const text = await r.text();
+  if (!r.ok) {
+    let message = `${r.status} ${r.statusText}`;
+    try { message = JSON.parse(text).error || message; } catch (_) { /* not JSON */ }
+    showError(message);
+    throw new Error(message);
+  }
+  showError('');
+  return text;
+}
+$('save').onclick = async () => {
+  try {
+    const text = await saveScene();
+    const a = document.createElement('a');
+    a.href = URL.createObjectURL(new Blob([text], { type: 'application/octet-stream' }));
+    a.download = 'scene.ron';
+    document.body.append(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(a.href), 1000);
+  } catch (_) { /* shown in the error element */ }
+};
+
+// The actor under a viewport point (free bodies before fixed ones), or null.
+function pickActor(ray) {
+  const objects = groups.map((g) => g.object);
+  // Instances move every frame: refresh the bounds the raycast first tests against.
+  for (const o of objects) o.computeBoundingSphere();
+  const hits = ray.intersectObjects(objects, false).filter((h) => h.instanceId !== undefined);
+  const member = (h) => groups.find((g) => g.object === h.object)?.members[h.instanceId];
+  const free = hits.find((h) => !groups.find((g) => g.object === h.object)?.fixed);
+  const hit = free || hits[0];
+  return hit ? member(hit) : null;
+}
+
+// A click (not a drag) selects the body under it; on a fixed body or the ground plane it also
+// picks where new bodies drop.
 let down = null;
 canvas.addEventListener('pointerdown', (e) => { down = [e.clientX, e.clientY]; });
 canvas.addEventListener('pointerup', (e) => {
   if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 4) return;
   const rect = canvas.getBoundingClientRect();
-  const ndc = new THREE.Vector2(((e.clientX - rect.left) / rect.width) * 2 - 1, -((e.clientY - rect.top) / rect.height) * 2 + 1);
-  const ray = new THREE.Raycaster();
-  ray.setFromCamera(ndc, camera);
-  const hit = ray.ray.intersectPlane(new THREE.Plane(new THREE.Vector3(0, 1, 0), 0), new THREE.Vector3());
-  if (hit) {
-    placeAt = hit;
-    marker.position.set(hit.x, 0.01, hit.z);
-    marker.visible = true;
-  }
+  clickAt((e.clientX - rect.left) / rect.width, (e.clientY - rect.top) / rect.height).catch(() => {});
 });
+
+// A click at (fx, fy), fractions of the viewport's width and height from its top left.
+function clickAt(fx, fy) {
+  const ray = new THREE.Raycaster();
+  camera.updateMatrixWorld();
+  ray.setFromCamera(new THREE.Vector2(fx * 2 - 1, -(fy * 2 - 1)), camera);
+  const actor = pickActor(ray);
+  const selecting = select(actor ? actor.name : null);
+  if (!actor || actor.fixed) {
+    const hit = ray.ray.intersectPlane(new THREE.Plane(new THREE.Vector3(0, 1, 0), 0), new THREE.Vector3());
+    if (hit) {
+      placeAt = hit;
+      marker.position.set(hit.x, 0.01, hit.z);
+      marker.visible = true;
+    }
+  }
+  return selecting;
+}
 
 // ---- start ----------------------------------------------------------------------------------
 
@@ -418,6 +526,20 @@ async function runScript(list) {
         const box = document.querySelector(`[data-testid="system-${arg}"]`);
         if (box) { box.checked = what === 'tick'; await postSchedule(); }
       } else if (what === 'wait') await new Promise((r) => setTimeout(r, Number(arg || 100)));
+      else if (what === 'select') await select(arg || null);
+      else if (what === 'click') {
+        const [fx, fy] = (arg || '0.5/0.5').split('/').map(Number);
+        await clickAt(fx, fy);
+      }
+      else if (what === 'edit') {
+        const [field, value] = (arg || '').split('=');
+        if (!fields.includes(field)) {
+          showError(`edit: unknown field '${field}'; valid: ${fields.join(', ')}`);
+          continue;
+        }
+        $(`actor-${field}`).value = value ?? '';
+        await applyEdit([field]);
+      } else if (what === 'save') document.body.dataset.saved = await saveScene();
       // Let clicks' requests finish before the next action.
       await new Promise((r) => setTimeout(r, 50));
     } catch (_) { /* shown in the error element */ }

@@ -3,6 +3,7 @@
 //! HTTP requests (a few worker threads, `tiny_http`) read and change it under one mutex.
 
 mod api;
+mod save;
 
 use super::AppError;
 use crate::cli::args::StudioArgs;
@@ -46,16 +47,36 @@ pub(crate) struct Studio {
     pub steps_per_second: f64,
     /// Names added actors get when they have none: `added-<n>`.
     pub added: u64,
+    /// Edits of actors through `POST /api/actor`, by actor name, applied again on every
+    /// rebuild (reset, added actors); a loaded scene clears them.
+    pub edits: Vec<(String, save::ActorEdit)>,
 }
 
 impl Studio {
     /// Rebuilds `sim` from `def` (and the API's schedule, if any).
     pub fn rebuild(&mut self) -> Result<(), String> {
-        let sim = build_sim(&self.def, &self.path, self.schedule.as_deref(), &self.mesh_dir)?;
+        let mut sim = build_sim(&self.def, &self.path, self.schedule.as_deref(), &self.mesh_dir)?;
+        self.apply_edits(&mut sim);
         self.sim = sim;
         self.version += 1;
         self.error = None;
         Ok(())
+    }
+
+    /// Applies the recorded edits to a freshly built `sim`.
+    pub fn apply_edits(&self, sim: &mut Sim) {
+        for (name, edit) in &self.edits {
+            // Checked when made; the actor is in every rebuild of the same scene.
+            let _ = save::apply(sim, name, edit);
+        }
+    }
+
+    /// Records an edit of actor `name`, on top of earlier ones.
+    pub fn record_edit(&mut self, name: &str, edit: save::ActorEdit) {
+        match self.edits.iter_mut().find(|(n, _)| n == name) {
+            Some((_, e)) => *e = e.merged(edit),
+            None => self.edits.push((name.to_string(), edit)),
+        }
     }
 }
 
@@ -106,6 +127,7 @@ pub(super) fn studio(args: &StudioArgs) -> Result<(), AppError> {
         mesh_dir: mesh_dir.clone(),
         steps_per_second: 0.0,
         added: 0,
+        edits: Vec::new(),
     }));
 
     let server = tiny_http::Server::http((args.host.as_str(), args.port))
