@@ -1,97 +1,11 @@
 //! `rigid studio`'s JSON API (docs/studio.md), driven through the binary over plain HTTP/1.1.
 //! Each test starts its own server on a free port (`--port 0`) and kills it when done.
 
+mod common;
+use common::studio::{Studio, get, request, start};
 use serde_json::{Value, json};
-use std::io::{BufRead, BufReader, Read, Write};
-use std::net::TcpStream;
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant};
-
-/// A running studio; killed when dropped, also when a test fails.
-struct Studio {
-    child: Child,
-    addr: String,
-}
-
-impl Drop for Studio {
-    /// Ctrl-C first, so the studio removes its upload folder; then, if need be, a kill.
-    fn drop(&mut self) {
-        let _ = Command::new("kill").args(["-INT", &self.child.id().to_string()]).status();
-        let deadline = std::time::Instant::now() + Duration::from_secs(2);
-        while std::time::Instant::now() < deadline {
-            if let Ok(Some(_)) = self.child.try_wait() {
-                return;
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn start(scene: &str) -> Studio {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rigid"))
-        .args(["studio", scene, "--port", "0", "--no-open"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("rigid starts");
-    let stdout = child.stdout.take().expect("stdout");
-    let mut studio = Studio { child, addr: String::new() };
-    let mut lines = BufReader::new(stdout).lines();
-    let line = lines.next().expect("a line").expect("utf-8");
-    let at = line.find("http://").unwrap_or_else(|| panic!("no address in {line:?}"));
-    studio.addr = line[at + "http://".len()..].trim_end_matches('/').to_string();
-    // Keep draining stdout so the server never blocks on a full pipe.
-    std::thread::spawn(move || lines.for_each(drop));
-    studio
-}
-
-/// One request; returns the status and the body.
-fn request(studio: &Studio, method: &str, path: &str, body: &[u8]) -> (u16, Vec<u8>) {
-    let mut stream = TcpStream::connect(&studio.addr).expect("connect");
-    stream.set_read_timeout(Some(Duration::from_secs(20))).expect("timeout");
-    let head = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\nContent-Length: {}\r\n\r\n",
-        studio.addr,
-        body.len()
-    );
-    stream.write_all(head.as_bytes()).expect("write");
-    stream.write_all(body).expect("write");
-    let mut response = Vec::new();
-    stream.read_to_end(&mut response).expect("read");
-    let split = response.windows(4).position(|w| w == b"\r\n\r\n").expect("headers end");
-    let head = String::from_utf8_lossy(&response[..split]).to_string();
-    let status = head.split(' ').nth(1).and_then(|s| s.parse().ok()).expect("status");
-    let body = response[split + 4..].to_vec();
-    if head.to_ascii_lowercase().contains("transfer-encoding: chunked") {
-        (status, unchunk(&body))
-    } else {
-        (status, body)
-    }
-}
-
-/// The body of a chunked response (big bodies come so).
-fn unchunk(mut body: &[u8]) -> Vec<u8> {
-    let mut out = Vec::new();
-    loop {
-        let line_end = body.windows(2).position(|w| w == b"\r\n").expect("chunk size line");
-        let size_text = String::from_utf8_lossy(&body[..line_end]).to_string();
-        let size = usize::from_str_radix(size_text.split(';').next().expect("size").trim(), 16).expect("hex size");
-        body = &body[line_end + 2..];
-        if size == 0 {
-            return out;
-        }
-        out.extend_from_slice(&body[..size]);
-        body = &body[size + 2..];
-    }
-}
-
-fn get(studio: &Studio, path: &str) -> Value {
-    let (status, body) = request(studio, "GET", path, b"");
-    assert_eq!(status, 200, "GET {path}: {}", String::from_utf8_lossy(&body));
-    serde_json::from_slice(&body).expect("JSON")
-}
 
 fn post(studio: &Studio, path: &str, body: &str) -> (u16, Value) {
     let (status, body) = request(studio, "POST", path, body.as_bytes());

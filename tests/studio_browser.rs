@@ -4,59 +4,13 @@
 //! Needs Chromium (`CHROMIUM` names another binary): `.ci/run` installs it and runs
 //! `cargo test --test studio_browser -- --ignored`.
 
+mod common;
+use common::studio::{Studio, get, start};
 use serde_json::Value;
-use std::io::{BufRead, BufReader, Read, Write};
-use std::net::TcpStream;
-use std::process::{Child, Command, Stdio};
-use std::time::Duration;
-
-/// A running studio; killed when dropped, also when a test fails.
-struct Studio {
-    child: Child,
-    addr: String,
-}
-
-impl Drop for Studio {
-    /// Ctrl-C first, so the studio removes its upload folder; then, if need be, a kill.
-    fn drop(&mut self) {
-        let _ = Command::new("kill").args(["-INT", &self.child.id().to_string()]).status();
-        let deadline = std::time::Instant::now() + Duration::from_secs(2);
-        while std::time::Instant::now() < deadline {
-            if let Ok(Some(_)) = self.child.try_wait() {
-                return;
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn start(scene: &str) -> Studio {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rigid"))
-        .args(["studio", scene, "--port", "0", "--no-open"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("rigid starts");
-    let stdout = child.stdout.take().expect("stdout");
-    let mut studio = Studio { child, addr: String::new() };
-    let mut lines = BufReader::new(stdout).lines();
-    let line = lines.next().expect("a line").expect("utf-8");
-    let at = line.find("http://").unwrap_or_else(|| panic!("no address in {line:?}"));
-    studio.addr = line[at + "http://".len()..].trim_end_matches('/').to_string();
-    std::thread::spawn(move || lines.for_each(drop));
-    studio
-}
+use std::process::{Command, Stdio};
 
 fn state(studio: &Studio) -> Value {
-    let mut stream = TcpStream::connect(&studio.addr).expect("connect");
-    stream.set_read_timeout(Some(Duration::from_secs(20))).expect("timeout");
-    write!(stream, "GET /api/state HTTP/1.1\r\nHost: {}\r\nConnection: close\r\n\r\n", studio.addr).expect("write");
-    let mut response = String::new();
-    stream.read_to_string(&mut response).expect("read");
-    let (_, body) = response.split_once("\r\n\r\n").expect("headers end");
-    serde_json::from_str(body).expect("JSON")
+    get(studio, "/api/state")
 }
 
 /// Percent-encodes a URL query value.

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests (public API only).
 #![allow(dead_code)]
 
+pub mod studio;
+
 use rigid_sandbox::scene::instantiate::build;
 use rigid_sandbox::scene::{self, SceneDef};
 use rigid_sandbox::sim::{ActorState, Sim};
