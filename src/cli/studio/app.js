@@ -337,24 +337,40 @@ $('step').onclick = () => control({ action: 'step', steps: 1 }).catch(() => {});
 $('reset').onclick = () => control({ action: 'reset' }).catch(() => {});
 $('speed').onchange = (e) => control({ action: 'speed', speed: Number(e.target.value) }).catch(() => {});
 
-$('scene-file').onchange = async (e) => {
-  const file = e.target.files[0];
-  if (!file) return;
+async function loadSceneFile(file) {
   fitted = '';
   await api('/api/scene', await file.text(), false).then(pollState).catch(() => {});
-  e.target.value = '';
-};
+}
 
-$('mesh-file').onchange = async (e) => {
-  const file = e.target.files[0];
-  if (!file) return;
+async function loadMeshFile(file) {
   const name = file.name.replace(/[^A-Za-z0-9._-]/g, '_').replace(/^\.+/, '') || 'mesh.obj';
   try {
     await api(`/api/mesh?name=${encodeURIComponent(name)}`, await file.text(), false);
     await addActor(`Obj(path: "${name}", hull: true)`);
   } catch (_) { /* shown in the error element */ }
+}
+
+$('scene-file').onchange = async (e) => {
+  const file = e.target.files[0];
+  if (file) await loadSceneFile(file);
   e.target.value = '';
 };
+
+$('mesh-file').onchange = async (e) => {
+  const file = e.target.files[0];
+  if (file) await loadMeshFile(file);
+  e.target.value = '';
+};
+
+// A .ron scene or an .obj mesh dropped anywhere on the page loads as from the file inputs.
+document.addEventListener('dragover', (e) => e.preventDefault());
+document.addEventListener('drop', async (e) => {
+  e.preventDefault();
+  for (const file of e.dataTransfer.files) {
+    if (/\.obj$/i.test(file.name)) await loadMeshFile(file);
+    else await loadSceneFile(file);
+  }
+});
 
 // Where new bodies drop: the clicked ground point, else above the centre of the bodies.
 let placeAt = null;
