@@ -81,6 +81,10 @@ pub struct SceneArgs {
     /// Worker threads (default: the number of cores); results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub threads: Option<u32>,
+    /// Change one field of the scene before it is checked, e.g. `gravity=(0.0,-1.62,0.0)` or
+    /// `actors["ball"].restitution=0.5` (repeatable, applied in order; docs/cli.md).
+    #[arg(long = "set", value_name = "PATH=VALUE")]
+    pub set: Vec<String>,
 }
 
 /// `rigid render`.
@@ -158,8 +162,12 @@ pub struct RunArgs {
     #[arg(long, value_name = "FILE")]
     pub save: Option<PathBuf>,
     /// Continue the run saved in FILE (by `--save`) for `--steps` more steps.
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["dt", "schedule"])]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["dt", "schedule", "set"])]
     pub resume: Option<PathBuf>,
+    /// Change one field of the scene before it is checked, e.g. `gravity=(0.0,-1.62,0.0)` or
+    /// `actors["ball"].restitution=0.5` (repeatable, applied in order; docs/cli.md).
+    #[arg(long = "set", value_name = "PATH=VALUE")]
+    pub set: Vec<String>,
 }
 
 impl Default for RunArgs {
@@ -177,6 +185,7 @@ impl Default for RunArgs {
             schedule: None,
             save: None,
             resume: None,
+            set: Vec::new(),
         }
     }
 }
@@ -222,6 +231,10 @@ pub struct BenchArgs {
     /// Also draw time per step against actor count (log–log, a line per system) as SVG.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
+    /// Change a setting of the built scene: `dt`, `gravity` or `solver.<field>` only, e.g.
+    /// `solver.substeps=8` (repeatable, applied in order; docs/cli.md).
+    #[arg(long = "set", value_name = "PATH=VALUE")]
+    pub set: Vec<String>,
 }
 
 use crate::scene::MAX_STEPS;

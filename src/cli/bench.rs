@@ -76,8 +76,26 @@ pub fn run(
     threads: usize,
     sleep: bool,
 ) -> Result<BenchResult, crate::error::StepError> {
+    run_set(scene, size, steps, warmup, seed, threads, sleep, &[])
+}
+
+/// As `run`, with `--set` overrides (`dt`, `gravity`, `solver.<field>`) applied to the built
+/// scene after `sleep`; check them first with `crate::scene::overrides::apply_to_sim`.
+#[allow(clippy::too_many_arguments)]
+pub fn run_set(
+    scene: BenchScene,
+    size: u32,
+    steps: u64,
+    warmup: u64,
+    seed: u64,
+    threads: usize,
+    sleep: bool,
+    set: &[String],
+) -> Result<BenchResult, crate::error::StepError> {
     let mut sim = scene_sim(scene, size, seed);
     sim.ctx.params.sleep = sleep;
+    crate::scene::overrides::apply_to_sim(&mut sim, set).expect("overrides are checked before the runs");
+    let sleep = sim.ctx.params.sleep;
     let cubes = scene.cubes(sim.len());
     let start: Vec<Vector> = sim.actors()[cubes.clone()].iter().map(|a| a.pose.position).collect();
     let ke_start = sim.totals().kinetic_energy;
@@ -189,6 +207,9 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), AppError> {
         let flag = if scene == BenchScene::Pyramid { "--base" } else { "--actors" };
         return Err(AppError::Usage(format!("bench {}: give {flag} N[,N...]", scene.name())));
     }
+    // Checked once, before any run, on a throwaway sim: a bad `--set` is bad input.
+    let mut probe = crate::sim::Sim::new(1.0 / 60.0, Default::default(), crate::systems::default_schedule());
+    crate::scene::overrides::apply_to_sim(&mut probe, &args.set).map_err(AppError::Usage)?;
     sizes.sort_unstable();
     let gas = scene == BenchScene::BoxGas;
     let steps = args.steps.unwrap_or(if gas { 200 } else { 600 });
@@ -208,7 +229,7 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), AppError> {
         );
     }
     for size in sizes {
-        let r = crate::cli::bench::run(scene, size, steps, warmup, args.seed, threads, args.sleep)?;
+        let r = run_set(scene, size, steps, warmup, args.seed, threads, args.sleep, &args.set)?;
         if args.json {
             outln!("{}", serde_json::to_string(&r).expect("plain data serialises"));
         } else {

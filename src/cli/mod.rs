@@ -142,6 +142,21 @@ pub fn load_scene_text(path: Option<&Path>) -> Result<(SceneDef, PathBuf, String
     Ok((scene::parse(&text, &path)?, path, text))
 }
 
+/// As `load_scene_text`, with the `--set` overrides applied to the text before it is checked;
+/// the text returned is the edited one.
+pub fn load_scene_set(path: Option<&Path>, sets: &[String]) -> Result<(SceneDef, PathBuf, String), AppError> {
+    if sets.is_empty() {
+        return Ok(load_scene_text(path)?);
+    }
+    let path = path.map_or_else(|| PathBuf::from(DEMO_PATH), Path::to_path_buf);
+    let text = if path == Path::new(DEMO_PATH) { DEMO_SCENE.to_string() } else { scene::read(&path)? };
+    match scene::overrides::parse_with(&text, &path, sets) {
+        Ok((def, edited)) => Ok((def, path, edited)),
+        Err(scene::overrides::SetError::Set(message)) => Err(AppError::Usage(message)),
+        Err(scene::overrides::SetError::Scene(e)) => Err(e.into()),
+    }
+}
+
 pub(crate) fn print_warnings(sim: &mut Sim, path: &Path) {
     let warnings = crate::scene::warnings::scene_warnings(sim);
     for w in warnings.iter().take(10) {
@@ -192,7 +207,7 @@ pub(crate) fn check_writable(path: &Path, flag: &str) -> Result<(), AppError> {
 
 /// Loads and builds the scene of `render`/`export`; returns it with the number of steps.
 pub(crate) fn scene_sim(args: &SceneArgs) -> Result<(SceneDef, Sim, u64), AppError> {
-    let (mut def, path) = load_scene(args.scene.as_deref())?;
+    let (mut def, path, _) = load_scene_set(args.scene.as_deref(), &args.set)?;
     if let Some(dt) = args.dt {
         def.dt = dt;
     }

@@ -1,7 +1,7 @@
 //! `rigid run`: steps a scene (or resumes a snapshot), streams the trajectory, writes the
 //! final state and snapshot, and prints a summary; Ctrl-C stops at a step boundary.
 
-use super::{AppError, check_writable, load_scene_text, outln, print_warnings, progress_bar, write_error, write_out};
+use super::{AppError, check_writable, load_scene_set, outln, print_warnings, progress_bar, write_error, write_out};
 use crate::cli::args::RunArgs;
 use crate::error::SnapshotError;
 use crate::io::output::{TRAJECTORY_HEADER, state_json, trajectory_rows};
@@ -19,6 +19,9 @@ static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 /// The sim to run, with its scene text and path: a fresh scene, or a resumed snapshot.
 fn prepare(args: &RunArgs) -> Result<(Sim, PathBuf, String, u64), AppError> {
     if let Some(file) = &args.resume {
+        if !args.set.is_empty() {
+            return Err(AppError::Usage("--set changes a fresh scene; it cannot be used with --resume".into()));
+        }
         let snap = read_snapshot(file)?;
         let path = PathBuf::from(&snap.scene_path);
         let mut def = scene::parse(&snap.scene_text, &path)?;
@@ -29,7 +32,7 @@ fn prepare(args: &RunArgs) -> Result<(Sim, PathBuf, String, u64), AppError> {
         snap.restore(&mut sim).map_err(|message| SnapshotError { path: file.clone(), at: None, message })?;
         return Ok((sim, path, snap.scene_text, steps));
     }
-    let (mut def, path, text) = load_scene_text(args.scene.as_deref())?;
+    let (mut def, path, text) = load_scene_set(args.scene.as_deref(), &args.set)?;
     if let Some(dt) = args.dt {
         def.dt = dt;
     }

@@ -6,6 +6,7 @@ pub mod benchmarks;
 pub mod instantiate;
 pub mod joints;
 pub mod obj;
+pub mod overrides;
 mod schema;
 pub mod spawners;
 pub mod warnings;
