@@ -49,7 +49,17 @@ pub fn build(scene: &SceneDef, path: &Path) -> Result<Sim, SceneError> {
         }
         None => crate::systems::default_schedule(),
     };
-    let params = Params {
+    let mut sim = Sim::new(scene.dt, params(scene), schedule);
+    spawn_all(&mut sim, &instances(scene, path)?, path)?;
+    crate::scene::joints::build_joints(scene, &mut sim, path)?;
+    Ok(sim)
+}
+
+/// The pipeline settings a scene gives: its gravity and solver settings, substeps by
+/// `Params::substeps_for` unless it sets them.
+#[must_use]
+pub fn params(scene: &SceneDef) -> Params {
+    Params {
         gravity: vector(scene.gravity),
         max_sweeps: scene.solver.max_sweeps,
         correction: scene.solver.correction,
@@ -59,11 +69,7 @@ pub fn build(scene: &SceneDef, path: &Path) -> Result<Sim, SceneError> {
         sleep: scene.solver.sleep,
         restitution_threshold: scene.solver.restitution_threshold,
         ..Params::default()
-    };
-    let mut sim = Sim::new(scene.dt, params, schedule);
-    spawn_all(&mut sim, &instances(scene, path)?, path)?;
-    crate::scene::joints::build_joints(scene, &mut sim, path)?;
-    Ok(sim)
+    }
 }
 
 /// Spawns instances into `sim`, building each distinct shape's mesh once.

@@ -431,41 +431,37 @@ pub fn apply_to_sim(sim: &mut Sim, sets: &[String]) -> Result<(), String> {
         SetError::Scene(e) => e.to_string(),
     })?;
     let is = |name: &str| paths.iter().any(|p| matches!(p.last(), Some(Segment::Field(f)) if f == name));
-    let set_substeps = paths.iter().any(|p| p.len() == 2 && p[1] == Segment::Field("substeps".into()));
+    let top = |name: &str| paths.iter().any(|p| matches!(&p[..], [Segment::Field(f)] if f == name));
+    // The scene's own mapping to settings; only the fields set are copied.
+    let given = crate::scene::instantiate::params(&def);
     let p: &mut Params = &mut sim.ctx.params;
-    for path in &paths {
-        match &path[..] {
-            [Segment::Field(f)] if f == "dt" => {
-                sim.ctx.dt = def.dt;
-                if !set_substeps {
-                    p.substeps = Params::substeps_for(def.dt);
-                }
-            }
-            [Segment::Field(f)] if f == "gravity" => p.gravity = crate::scene::vector(def.gravity),
-            _ => {}
-        }
+    if top("dt") {
+        sim.ctx.dt = def.dt;
     }
-    let s = def.solver;
+    // A new step gets the substeps it calls for, unless they are set too.
+    if top("dt") || is("substeps") {
+        p.substeps = given.substeps;
+    }
+    if top("gravity") {
+        p.gravity = given.gravity;
+    }
     if is("max_sweeps") {
-        p.max_sweeps = s.max_sweeps;
+        p.max_sweeps = given.max_sweeps;
     }
     if is("correction") {
-        p.correction = s.correction;
+        p.correction = given.correction;
     }
     if is("slop") {
-        p.slop = s.slop;
-    }
-    if set_substeps {
-        p.substeps = s.substeps.unwrap_or_else(|| Params::substeps_for(def.dt));
+        p.slop = given.slop;
     }
     if is("iterations") {
-        p.iterations = s.iterations;
+        p.iterations = given.iterations;
     }
     if is("sleep") {
-        p.sleep = s.sleep;
+        p.sleep = given.sleep;
     }
     if is("restitution_threshold") {
-        p.restitution_threshold = s.restitution_threshold;
+        p.restitution_threshold = given.restitution_threshold;
     }
     Ok(())
 }
