@@ -7,7 +7,6 @@ use crate::math::{Quat, Scalar, Vector};
 use crate::scene::{SceneDef, V3, invalid, vector};
 use crate::sim::Sim;
 use crate::solver::{Joint, JointKind, Joints, Motor, Spring};
-use miette::NamedSource;
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::path::Path;
@@ -330,17 +329,9 @@ pub(crate) fn check_references(scene: &SceneDef, text: &str, path: &Path) -> Res
 
 /// A `Parse` error at `offset` in `text` (or a plain `Invalid` one without a place).
 fn located(path: &Path, text: &str, offset: Option<usize>, message: String) -> SceneError {
-    let Some(offset) = offset else { return invalid(path, "scene", "joints", message) };
-    let before = &text.as_bytes()[..offset];
-    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-    let col = before.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
-    SceneError::Parse {
-        path: path.to_path_buf(),
-        line,
-        col,
-        message,
-        text: NamedSource::new(path.display().to_string(), text.to_string()),
-        at: (offset, 1).into(),
+    match offset {
+        Some(offset) => crate::scene::error_at(path, text, (offset, 1), message),
+        None => invalid(path, "scene", "joints", message),
     }
 }
 

@@ -376,15 +376,7 @@ pub fn read(path: &Path) -> Result<String, SceneError> {
     let text = String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
-        let (line, col) = line_col(&text, at);
-        SceneError::Parse {
-            path: path.to_path_buf(),
-            line,
-            col,
-            message: "not UTF-8 text (is this a binary file?)".into(),
-            text: NamedSource::new(path.display().to_string(), text),
-            at: at.into(),
-        }
+        error_at(path, &text, (at, 0), "not UTF-8 text (is this a binary file?)".into())
     })?;
     Ok(text)
 }
@@ -463,6 +455,19 @@ fn offset_of(text: &str, line: usize, col: usize) -> usize {
     let start: usize = text.split_inclusive('\n').take(line - 1).map(str::len).sum();
     let line_text = text.get(start..).unwrap_or("").lines().next().unwrap_or("");
     (start + line_text.char_indices().nth(col - 1).map_or(line_text.len(), |(i, _)| i)).min(text.len())
+}
+
+/// A `Parse` error for the `len` bytes at byte `offset` of `text` (the snippet underlines them).
+pub(crate) fn error_at(path: &Path, text: &str, (offset, len): (usize, usize), message: String) -> SceneError {
+    let (line, col) = line_col(text, offset);
+    SceneError::Parse {
+        path: path.to_path_buf(),
+        line,
+        col,
+        message,
+        text: NamedSource::new(path.display().to_string(), text.to_string()),
+        at: (offset, len).into(),
+    }
 }
 
 fn line_col(text: &str, offset: usize) -> (usize, usize) {
