@@ -16,12 +16,10 @@ use crate::model::clusters::Cluster;
 /// the reach, so features a fast pair may bring into contact this step are among those tried.
 const SLAB_REACH: Scalar = 0.5;
 
-pub use crate::model::mesh::MANY_EDGES;
-
 /// True for a mesh whose contact tests take the paths of this module.
 #[must_use]
 pub fn is_many_faced(p: &Posed) -> bool {
-    p.mesh.feature_edges.len() > MANY_EDGES
+    p.mesh.is_many_faced()
 }
 
 /// The vertex of `p` lowest along `dir` (least `v·dir`) and that value, walking from `start`

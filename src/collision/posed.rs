@@ -231,7 +231,7 @@ impl Posed {
     /// normals to the world: a small mesh's world planes, or a many-faced mesh's body-frame
     /// planes with `p` taken into the body frame, so no plane need be turned.
     fn planes_for(&self, p: Vector) -> (Vector, &[Plane], Option<crate::math::Mat3>) {
-        if self.mesh.clusters.is_empty() {
+        if !self.mesh.is_many_faced() {
             (p, self.world_planes(), None)
         } else {
             (self.rotation.transpose() * (p - self.position), &self.mesh.planes, Some(self.rotation))
@@ -245,7 +245,7 @@ impl Posed {
     /// The face whose outward normal is most along `dir` (world), with that cosine.
     #[must_use]
     pub fn most_along(&self, dir: Vector) -> Option<(Scalar, usize)> {
-        let (d, planes) = if self.mesh.clusters.is_empty() {
+        let (d, planes) = if !self.mesh.is_many_faced() {
             (dir, self.world_planes())
         } else {
             (self.rotation.transpose() * dir, &self.mesh.planes[..])

@@ -141,7 +141,7 @@ impl ConvexMesh {
             feature_edges.iter().enumerate().flat_map(|(e, &[i, j])| [(i, e as u32), (j, e as u32)]),
         );
         let seeds = seeds(&vertices);
-        let clusters = if feature_edges.len() > MANY_EDGES {
+        let clusters = if many_faced(&feature_edges) {
             crate::model::clusters::clusters(&vertices, &triangles, &edges)
         } else {
             Vec::new()
@@ -173,6 +173,13 @@ impl ConvexMesh {
         Ok((mesh, props.centroid))
     }
 
+    /// True for a many-faced mesh (more than `MANY_EDGES` feature edges): its contact tests
+    /// visit the features near the contact only (`collision::hull`).
+    #[must_use]
+    pub fn is_many_faced(&self) -> bool {
+        many_faced(&self.feature_edges)
+    }
+
     /// The canonical box of docs/physics.md §0 with these full edge lengths [m].
     ///
     /// # Panics
@@ -188,6 +195,11 @@ impl ConvexMesh {
 /// features near the contact only (`collision::hull`; an icosphere of one subdivision has 120,
 /// a box 12, a 16-sided cylinder 48).
 pub const MANY_EDGES: usize = 48;
+
+/// True for a mesh of these feature edges that is many-faced (see `MANY_EDGES`).
+fn many_faced(feature_edges: &[[u32; 2]]) -> bool {
+    feature_edges.len() > MANY_EDGES
+}
 
 /// Every mesh of a simulation, once: box-gas's 64 000 cubes share one.
 #[derive(Clone, Debug, Default)]
