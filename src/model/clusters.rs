@@ -70,24 +70,20 @@ pub fn clusters(vertices: &[Vector], triangles: &[[u32; 3]], edges: &[[u32; 2]])
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::mesh::ConvexMesh;
     use crate::model::shapes::icosphere_raw;
 
     #[test]
     fn every_feature_is_in_one_cluster_whose_sphere_holds_it() {
-        let (v, t) = icosphere_raw(0.5, 3);
-        let mut edges: Vec<[u32; 2]> = t
-            .iter()
-            .flat_map(|tri| (0..3).map(move |k| [tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3])]))
-            .collect();
-        edges.sort_unstable();
-        edges.dedup();
-        let cs = clusters(&v, &t, &edges);
+        let (raw_v, raw_t) = icosphere_raw(0.5, 3);
+        let mesh = ConvexMesh::new(raw_v, raw_t).expect("an icosphere is valid").0;
+        let (v, t, edges, cs) = (&mesh.vertices, &mesh.triangles, &mesh.edges, &mesh.clusters);
         let count = |f: fn(&Cluster) -> usize| cs.iter().map(f).sum::<usize>();
         assert_eq!(count(|c| c.vertices.len()), v.len());
         assert_eq!(count(|c| c.triangles.len()), t.len());
         assert_eq!(count(|c| c.edges.len()), edges.len());
         let inside = |c: &Cluster, i: u32| (v[i as usize] - c.centre).length() <= c.radius * (1.0 + 1e-12);
-        for c in &cs {
+        for c in cs {
             assert!(c.vertices.iter().all(|&i| inside(c, i)));
             assert!(c.triangles.iter().all(|&k| t[k as usize].iter().all(|&i| inside(c, i))));
             assert!(c.edges.iter().all(|&k| edges[k as usize].iter().all(|&i| inside(c, i))));
