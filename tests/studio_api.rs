@@ -2,7 +2,7 @@
 //! Each test starts its own server on a free port (`--port 0`) and kills it when done.
 
 mod common;
-use common::studio::{Studio, get, request, start};
+use common::studio::{PAGE_TEST_IDS, Studio, get, request, start};
 use serde_json::{Value, json};
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -207,24 +207,7 @@ fn frames_are_seven_floats_per_actor() {
     let (status, page) = request(&s, "GET", "/", b"");
     assert_eq!(status, 200);
     let page = String::from_utf8(page).expect("utf-8");
-    for id in [
-        "viewport",
-        "play",
-        "pause",
-        "step",
-        "reset",
-        "time",
-        "actor-count",
-        "scene-file",
-        "mesh-file",
-        "actor-name",
-        "actor-mass",
-        "actor-restitution",
-        "actor-friction",
-        "actor-velocity",
-        "actor-apply",
-        "save",
-    ] {
+    for id in PAGE_TEST_IDS {
         assert!(page.contains(&format!("data-testid=\"{id}\"")), "page lacks {id}");
     }
     for script in ["/app.js", "/three.module.min.js", "/OrbitControls.js"] {

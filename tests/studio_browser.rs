@@ -5,7 +5,7 @@
 //! `cargo test --test studio_browser -- --ignored`.
 
 mod common;
-use common::studio::{Studio, get, start};
+use common::studio::{PAGE_TEST_IDS, Studio, get, start};
 use serde_json::Value;
 use std::process::{Command, Stdio};
 
@@ -75,24 +75,7 @@ fn attribute(tag: &str, name: &str) -> Option<String> {
 fn the_page_has_every_control_and_time_advances() {
     let s = start("scenes/box-drop.ron");
     let dom = chromium(&format!("http://{}/?play=1", s.addr), "--dump-dom", 3000);
-    for id in [
-        "viewport",
-        "play",
-        "pause",
-        "step",
-        "reset",
-        "time",
-        "actor-count",
-        "scene-file",
-        "mesh-file",
-        "add-box",
-        "add-sphere",
-        "add-cylinder",
-        "timings",
-        "error",
-        "system-gravity",
-        "system-integrate",
-    ] {
+    for id in PAGE_TEST_IDS.iter().chain(&["system-gravity", "system-integrate"]) {
         element(&dom, id);
     }
     let (tag, text) = element(&dom, "time");

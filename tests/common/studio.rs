@@ -94,3 +94,29 @@ pub fn get(studio: &Studio, path: &str) -> Value {
     assert_eq!(status, 200, "GET {path}: {}", String::from_utf8_lossy(&body));
     serde_json::from_slice(&body).expect("JSON")
 }
+
+/// The `data-testid`s the page is written with (docs/studio.md); the schedule's `system-<name>`
+/// checkboxes are made by its script.
+pub const PAGE_TEST_IDS: &[&str] = &[
+    "viewport",
+    "play",
+    "pause",
+    "step",
+    "reset",
+    "time",
+    "actor-count",
+    "scene-file",
+    "mesh-file",
+    "add-box",
+    "add-sphere",
+    "add-cylinder",
+    "timings",
+    "error",
+    "actor-name",
+    "actor-mass",
+    "actor-restitution",
+    "actor-friction",
+    "actor-velocity",
+    "actor-apply",
+    "save",
+];
