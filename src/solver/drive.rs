@@ -1,6 +1,6 @@
 //! Carrying out the substeps' plan over the constraint groups, on one thread or two.
 
-use super::joint_pass::{JointPass, joint_pass};
+use super::joint_pass::{JointPass, joint_pass, store_impulses};
 use super::{BodyStore, Joints, Sides, Softness, SolverBody};
 use crate::math::{Scalar, Vector};
 use crate::solver::{ConstraintGroup, SolveScratch};
@@ -68,6 +68,7 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
         let Step::Pass(pass) = step else {
             apply(step, left);
             apply(step, right);
+            joints.stale |= matches!(step, Step::Move(_));
             continue;
         };
         if threaded {
@@ -83,10 +84,11 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
             Pass::Warm => Some(JointPass::Warm),
             Pass::Solve(_) => Some(JointPass::Solve),
             Pass::Relax => Some(JointPass::Relax),
-            Pass::Restitution(_) => None,
+            Pass::Restitution(_) => Some(JointPass::Relax),
         };
         if let Some(joint) = joint.filter(|_| !joints.joints.is_empty()) {
             joint_pass(&mut Sides { left: &mut *left, right: &mut *right }, joints, joint, h);
         }
     }
+    store_impulses(joints);
 }

@@ -1,24 +1,25 @@
 //! Solving the joints within the contact solver's substeps (docs/joints.md): after each pass
-//! over the contacts, one pass over every joint in scene order, on the same solver bodies, so
-//! a body held by both sees one set of velocities. Scalar code: joints are few.
+//! over the contacts, one pass over every joint, on the same solver bodies, so a body held by
+//! both sees one set of velocities.
 //!
-//! Each joint is a few rows solved as Box2D v3 solves its joints: soft equality rows (the
-//! bias from the position error as it stands after the earlier substeps, with the joints'
-//! spring of `JOINT_HERTZ_PER_SUBSTEP_RATE`), rigid in the relax pass; limits as one-sided
-//! rows, speculative while apart; motors as velocity rows within their largest torque or force
-//! times the substep; springs as soft rows of their own frequency. Points and locked rotations
-//! are solved as 2×2 or 3×3 blocks, so one joint's rows do not fight each other.
+//! The rows are solved as Box2D v3 solves its joints: soft rows in the solve passes (the bias
+//! from the position error as it stands after the earlier substeps, with the joints' spring of
+//! `JOINT_HERTZ_PER_SUBSTEP_RATE`), rigid in the relax pass; limits as one-sided rows,
+//! speculative while apart; motors as velocity rows within their largest torque or force times
+//! the substep; springs as soft rows of their own frequency. The equality rows of all joints
+//! (points, locked rotations, rods) are solved together, exactly (`JointSystem`); the others
+//! one joint after another, before them.
 
+use super::joint_system::{MAX_ROWS, ScaledRow};
 use super::joints::{Frame, Geometry, Joint, JointImpulses, JointKind, Joints};
 use super::{BodyStore, SolverBody};
 use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
 
-/// Natural frequency of the joints' spring as a fraction of the substep rate: a quarter, as
-/// the contacts' (Box2D v3's bound for a stable spring). Stiffer, a hanging chain of ten links
-/// shakes itself apart: Gauss–Seidel over many joints does not settle a spring near the
-/// substep rate. A soft joint gives under a load by load / (effective mass · ω²), so a light
-/// chain holding a heavy load needs more substeps (scenes/chain.ron takes 32).
-const JOINT_HERTZ_PER_SUBSTEP_RATE: Scalar = 0.25;
+/// Natural frequency of the joints' spring as a fraction of the substep rate: one, four times
+/// the contacts' quarter. Gauss–Seidel needs a spring well below the substep rate to settle;
+/// the equality rows are solved exactly (`JointSystem`), so they can be stiff, and a soft joint
+/// gives under a load by load / (effective mass · ω²).
+const JOINT_HERTZ_PER_SUBSTEP_RATE: Scalar = 1.0;
 
 /// Damping ratio of the joints' spring (Box2D v3's joint damping ratio).
 const JOINT_DAMPING_RATIO: Scalar = 2.0;
@@ -153,30 +154,7 @@ impl<B: BodyStore + ?Sized> Pair<'_, B> {
             + (eb.scale * p.ang_b).dot(eb.scale * q.ang_b)
     }
 
-    /// Solves up to three equality rows as one block, with errors `c` and accumulated
-    /// impulses `acc` (both per row).
-    fn block(&mut self, rows: &[Row], c: [Scalar; 3], acc: &mut [Scalar; 3], soft: Soft) {
-        let mut k = Mat3::IDENTITY;
-        let mut rhs = Vector::ZERO;
-        for (i, p) in rows.iter().enumerate() {
-            for (j, q) in rows.iter().enumerate() {
-                k.col_mut(j)[i] = self.k(p, q);
-            }
-            rhs[i] = -soft.mass_scale * (self.speed(p) + soft.bias_rate * c[i]);
-        }
-        let det = k.determinant();
-        if det.is_nan() || det.abs() <= 1e-300 {
-            return; // both ends fixed, or a degenerate lever: nothing to move
-        }
-        let lambda = k.inverse() * rhs;
-        for (i, row) in rows.iter().enumerate() {
-            let l = lambda[i] - soft.impulse_scale * acc[i];
-            acc[i] += l;
-            self.apply(row, l);
-        }
-    }
-
-    /// One equality row (a rod, a spring).
+    /// One soft equality row (a spring).
     fn equal(&mut self, row: &Row, c: Scalar, acc: &mut Scalar, soft: Soft) {
         let k = self.k(row, row);
         if k > 0.0 {
@@ -219,25 +197,141 @@ fn across(u: Vector) -> [Vector; 2] {
     super::constraints::tangents(u)
 }
 
-/// The three point rows at the anchors.
-fn point_rows(g: &Geometry) -> [Row; 3] {
-    [Vector::X, Vector::Y, Vector::Z].map(|n| Row::linear(n, g.r_a, g.r_b))
+/// Where an equality row's accumulated impulse is kept between refreshes (`JointImpulses`):
+/// along a direction of the point's or the rotation's impulse, or as the axial one.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) enum Carry {
+    Point(Vector),
+    Angular(Vector),
+    #[default]
+    Axial,
 }
 
-/// Runs `pass` over every joint, in order, with substeps of `h` [s].
+/// The equality rows of a joint of `kind`: how many.
+pub(crate) fn equality_count(kind: &JointKind) -> usize {
+    match kind {
+        JointKind::Ball { .. } => 3,
+        JointKind::Hinge { .. } | JointKind::Slider { .. } => 5,
+        JointKind::Fixed => 6,
+        JointKind::Distance { rod, .. } => usize::from(*rod),
+    }
+}
+
+/// A joint's equality rows at geometry `g`: each row, its position error and where its impulse
+/// is kept. Points and locked rotations on world axes where all three are held, across the
+/// axis where two are.
+fn equality_rows(joint: &Joint, g: &Geometry) -> [(Row, Scalar, Carry); MAX_ROWS] {
+    let mut out = [(Row::angular(Vector::ZERO), 0.0, Carry::Axial); MAX_ROWS];
+    let mut n = 0;
+    let mut push = |row: Row, c: Scalar, carry: Carry| {
+        out[n] = (row, c, carry);
+        n += 1;
+    };
+    let axes = [Vector::X, Vector::Y, Vector::Z];
+    if matches!(joint.kind, JointKind::Ball { .. } | JointKind::Hinge { .. } | JointKind::Fixed) {
+        for (k, n) in axes.into_iter().enumerate() {
+            push(Row::linear(n, g.r_a, g.r_b), g.d[k], Carry::Point(n));
+        }
+    }
+    match joint.kind {
+        JointKind::Hinge { .. } => {
+            let bend = g.u_b.cross(g.u_a);
+            for t in across(g.u_b) {
+                push(Row::angular(t), bend.dot(t), Carry::Angular(t));
+            }
+        }
+        JointKind::Slider { .. } => {
+            // B's lever to the point that meets A's anchor: A's anchor slides on B.
+            for t in across(g.u_b) {
+                push(Row::linear(t, g.r_a, g.r_b + g.d), g.d.dot(t), Carry::Point(t));
+            }
+        }
+        JointKind::Distance { rod: true, .. } => match axial(joint, g) {
+            Some((row, l)) => push(row, l - joint.length, Carry::Axial),
+            None => push(Row::angular(Vector::ZERO), 0.0, Carry::Axial),
+        },
+        _ => {}
+    }
+    if matches!(joint.kind, JointKind::Slider { .. } | JointKind::Fixed) {
+        let twist = g.twist();
+        for (k, u) in axes.into_iter().enumerate() {
+            push(Row::angular(u), twist[k], Carry::Angular(u));
+        }
+    }
+    out
+}
+
+/// Runs `pass` over every joint with substeps of `h` [s]: the one-sided and driven rows joint
+/// by joint in scene order, then the equality rows of all at once.
 pub(crate) fn joint_pass<B: BodyStore + ?Sized>(bodies: &mut B, joints: &mut Joints, pass: JointPass, h: Scalar) {
+    if joints.stale {
+        refresh(&*bodies, joints);
+    }
     let soft = match pass {
         JointPass::Solve => Soft::new(JOINT_HERTZ_PER_SUBSTEP_RATE / h, JOINT_DAMPING_RATIO, h),
         JointPass::Warm | JointPass::Relax => Soft::RIGID,
     };
-    let Joints { joints, impulses, ends, .. } = joints;
-    for ((joint, imp), &ends) in joints.iter().zip(impulses.iter_mut()).zip(ends.iter()) {
-        let frames = ends.map(|e| e.frame(bodies.body(e.slot)));
-        let g = Geometry::new(joint, frames[0], frames[1]);
+    let Joints { joints: list, impulses, ends, geometry, system, .. } = joints;
+    for (((joint, imp), &ends), g) in list.iter().zip(impulses.iter_mut()).zip(ends.iter()).zip(geometry.iter()) {
         let mut pair = Pair { bodies: &mut *bodies, ends };
         match pass {
-            JointPass::Warm => warm(&mut pair, joint, &g, imp),
-            JointPass::Solve | JointPass::Relax => solve(&mut pair, joint, &g, imp, soft, pass, h),
+            JointPass::Warm => warm(&mut pair, joint, g, imp),
+            JointPass::Solve | JointPass::Relax => solve(&mut pair, joint, g, imp, soft, pass, h),
+        }
+    }
+    match pass {
+        JointPass::Warm => system.warm(bodies),
+        JointPass::Solve | JointPass::Relax => {
+            system.pass(bodies, [soft.bias_rate, soft.mass_scale, soft.impulse_scale]);
+        }
+    }
+}
+
+/// The joints' geometry and equality rows at the bodies' current poses, K factorised, and the
+/// accumulated impulses carried over to the new rows.
+fn refresh<B: BodyStore + ?Sized>(bodies: &B, joints: &mut Joints) {
+    store_impulses(joints);
+    let Joints { joints: list, impulses, ends, geometry, system, carry, spans, .. } = joints;
+    geometry.clear();
+    geometry.extend(list.iter().zip(ends.iter()).map(|(joint, ends)| {
+        let [a, b] = ends.map(|e| e.frame(bodies.body(e.slot)));
+        Geometry::new(joint, a, b)
+    }));
+    for &(k, first, len) in spans.iter() {
+        let (joint, imp, e) = (&list[k], &impulses[k], &ends[k]);
+        for (i, (row, c, how)) in equality_rows(joint, &geometry[k]).into_iter().take(len).enumerate() {
+            let scaled = ScaledRow { lin: row.lin, g_a: e[0].scale * row.ang_a, g_b: e[1].scale * row.ang_b };
+            system.rows[first + i] = scaled;
+            system.error[first + i] = c;
+            system.acc[first + i] = match how {
+                Carry::Point(n) => imp.point.dot(n),
+                Carry::Angular(u) => imp.angular.dot(u),
+                Carry::Axial => imp.axial,
+            };
+            carry[first + i] = how;
+        }
+    }
+    system.factorise();
+    joints.stale = false;
+    joints.rows_valid = true;
+}
+
+/// Keeps the equality rows' accumulated impulses in the joints' `JointImpulses` (world
+/// vectors), which outlive the rows: the next rows, turned a little, start from them.
+pub(crate) fn store_impulses(joints: &mut Joints) {
+    if !joints.rows_valid {
+        return;
+    }
+    let Joints { impulses, system, carry, spans, .. } = joints;
+    for &(k, first, len) in spans.iter() {
+        let imp = &mut impulses[k];
+        (imp.point, imp.angular) = (Vector::ZERO, Vector::ZERO);
+        for i in first..first + len {
+            match carry[i] {
+                Carry::Point(n) => imp.point += n * system.acc[i],
+                Carry::Angular(u) => imp.angular += u * system.acc[i],
+                Carry::Axial => imp.axial = system.acc[i],
+            }
         }
     }
 }
@@ -265,29 +359,23 @@ fn cone(g: &Geometry, cone: Scalar) -> Option<(Row, Scalar)> {
     (n.length() > 1e-9).then(|| (Row::angular(-n.normalize()), cone - swing))
 }
 
-/// Re-applies the accumulated impulses at the current geometry.
+/// Re-applies the accumulated impulses of the one-sided and driven rows (the equality rows'
+/// are the system's).
 fn warm<B: BodyStore + ?Sized>(pair: &mut Pair<B>, joint: &Joint, g: &Geometry, imp: &JointImpulses) {
-    if !matches!(joint.kind, JointKind::Distance { .. }) {
-        let lever = if matches!(joint.kind, JointKind::Slider { .. }) { g.r_b + g.d } else { g.r_b };
-        for (k, n) in [Vector::X, Vector::Y, Vector::Z].into_iter().enumerate() {
-            pair.apply(&Row::linear(n, g.r_a, lever), imp.point[k]);
-        }
-        for (k, u) in [Vector::X, Vector::Y, Vector::Z].into_iter().enumerate() {
-            pair.apply(&Row::angular(u), imp.angular[k]);
-        }
-    }
     if let JointKind::Ball { cone: Some(c) } = joint.kind
         && let Some((row, _)) = cone(g, c)
     {
         pair.apply(&row, imp.limits[1]);
     }
     if let Some((row, _)) = axial(joint, g) {
-        pair.apply(&row, imp.axial + imp.motor + imp.limits[0] - imp.limits[1]);
+        let spring = if matches!(joint.kind, JointKind::Distance { rod: false, .. }) { imp.axial } else { 0.0 };
+        pair.apply(&row, spring + imp.motor + imp.limits[0] - imp.limits[1]);
     }
 }
 
-/// One solve (with position feedback `soft`) or relax pass of a joint: motor and spring,
-/// limits, locked rotations, then the point, Box2D's order (the point, the stiffest, last).
+/// One solve (with position feedback `soft`) or relax pass of a joint's one-sided and driven
+/// rows: motor and spring, then limits (Box2D's order; the equality rows, the stiffest, come
+/// after all of these).
 fn solve<B: BodyStore + ?Sized>(
     pair: &mut Pair<B>,
     joint: &Joint,
@@ -297,24 +385,19 @@ fn solve<B: BodyStore + ?Sized>(
     pass: JointPass,
     h: Scalar,
 ) {
-    let axial = axial(joint, g);
     let limits = match joint.kind {
         JointKind::Hinge { limits, .. } | JointKind::Slider { limits, .. } => limits,
         JointKind::Distance { range, .. } => Some(range),
         _ => None,
     };
-    if let Some((row, value)) = axial {
+    if let Some((row, value)) = axial(joint, g) {
         if let JointKind::Hinge { motor: Some(m), .. } | JointKind::Slider { motor: Some(m), .. } = joint.kind {
             pair.motor(&row, m.speed, &mut imp.motor, m.max * h);
         }
-        match joint.kind {
-            // Its own spring, solved with position feedback only (one implicit step a substep).
-            JointKind::Distance { spring: Some(s), .. } if matches!(pass, JointPass::Solve) => {
-                let spring = Soft::new(s.frequency, s.damping_ratio, h);
-                pair.equal(&row, value - joint.length, &mut imp.axial, spring);
-            }
-            JointKind::Distance { rod: true, .. } => pair.equal(&row, value - joint.length, &mut imp.axial, soft),
-            _ => {}
+        // Its own spring, solved with position feedback only (one implicit step a substep).
+        if let (JointKind::Distance { spring: Some(s), .. }, JointPass::Solve) = (joint.kind, pass) {
+            let spring = Soft::new(s.frequency, s.damping_ratio, h);
+            pair.equal(&row, value - joint.length, &mut imp.axial, spring);
         }
         if let Some([lo, hi]) = limits {
             if lo > Scalar::NEG_INFINITY && !(matches!(joint.kind, JointKind::Distance { .. }) && lo <= 0.0) {
@@ -329,37 +412,6 @@ fn solve<B: BodyStore + ?Sized>(
         && let Some((row, room)) = cone(g, c)
     {
         pair.limit(&row, room, &mut imp.limits[1], soft, h);
-    }
-    match joint.kind {
-        JointKind::Hinge { .. } => {
-            let t = across(g.u_b);
-            let bend = g.u_b.cross(g.u_a);
-            let mut acc = [imp.angular.dot(t[0]), imp.angular.dot(t[1]), 0.0];
-            pair.block(&t.map(Row::angular), [bend.dot(t[0]), bend.dot(t[1]), 0.0], &mut acc, soft);
-            imp.angular = t[0] * acc[0] + t[1] * acc[1];
-        }
-        JointKind::Slider { .. } | JointKind::Fixed => {
-            let rows = [Vector::X, Vector::Y, Vector::Z].map(Row::angular);
-            let mut acc = imp.angular.to_array();
-            pair.block(&rows, g.twist().to_array(), &mut acc, soft);
-            imp.angular = Vector::from_array(acc);
-        }
-        _ => {}
-    }
-    match joint.kind {
-        JointKind::Ball { .. } | JointKind::Hinge { .. } | JointKind::Fixed => {
-            let mut acc = imp.point.to_array();
-            pair.block(&point_rows(g), g.d.to_array(), &mut acc, soft);
-            imp.point = Vector::from_array(acc);
-        }
-        JointKind::Slider { .. } => {
-            let t = across(g.u_b);
-            let rows = t.map(|n| Row::linear(n, g.r_a, g.r_b + g.d));
-            let mut acc = [imp.point.dot(t[0]), imp.point.dot(t[1]), 0.0];
-            pair.block(&rows, [g.d.dot(t[0]), g.d.dot(t[1]), 0.0], &mut acc, soft);
-            imp.point = t[0] * acc[0] + t[1] * acc[1];
-        }
-        JointKind::Distance { .. } => {}
     }
 }
 
@@ -389,4 +441,9 @@ pub(crate) fn prepare(
     joints.ends.clear();
     joints.ends.extend(joints.joints.iter().map(|j| [end(j.a), j.b.map_or(world, end)]));
     joints.impulses.resize(joints.joints.len(), JointImpulses::default());
+    joints.system.set_nodes(&joints.ends, joints.joints.iter().map(|j| equality_count(&j.kind)));
+    joints.spans.clear();
+    joints.spans.extend(joints.system.spans().map(|(k, r)| (k, r.start, r.len())));
+    joints.carry.resize(joints.system.rows.len(), Carry::Axial);
+    (joints.stale, joints.rows_valid) = (true, false);
 }

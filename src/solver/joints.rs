@@ -175,6 +175,7 @@ impl Joint {
 }
 
 /// A joint's state at given poses, in world coordinates.
+#[derive(Clone, Debug)]
 pub(crate) struct Geometry {
     /// The anchor's lever from A's centre.
     pub r_a: Vector,
@@ -234,8 +235,17 @@ pub struct Joints {
     pub impulses: Vec<JointImpulses>,
     /// The pairs (a < b) that a joint joins without `collide`, sorted: `cull` drops them.
     pub no_collide: Vec<(u32, u32)>,
-    /// Scratch of the solver: each joint's ends this step.
+    /// Scratch of the solver: each joint's ends this step, its geometry at the last refresh,
+    /// and the equality rows solved together (`JointSystem`) with where each row's impulse is
+    /// kept and which rows are whose ((joint, first row, rows)).
     pub(crate) ends: Vec<[super::joint_pass::End; 2]>,
+    pub(crate) geometry: Vec<Geometry>,
+    pub(crate) system: super::joint_system::JointSystem,
+    pub(crate) carry: Vec<super::joint_pass::Carry>,
+    pub(crate) spans: Vec<(usize, usize, usize)>,
+    /// The bodies moved since the last refresh; the rows hold impulses not yet stored.
+    pub(crate) stale: bool,
+    pub(crate) rows_valid: bool,
 }
 
 impl Joints {
@@ -247,7 +257,7 @@ impl Joints {
         no_collide.sort_unstable();
         no_collide.dedup();
         let impulses = vec![JointImpulses::default(); joints.len()];
-        Self { joints, impulses, no_collide, ends: Vec::new() }
+        Self { joints, impulses, no_collide, ..Self::default() }
     }
 
     /// True when the pair (a < b) is joined by a joint that keeps them from colliding.

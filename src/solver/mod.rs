@@ -30,6 +30,7 @@ use crate::math::{Scalar, Vector};
 mod constraints;
 mod drive;
 mod joint_pass;
+mod joint_system;
 mod joints;
 mod kernel;
 mod lanes;
