@@ -1,0 +1,120 @@
+"""The Python package's numbers in BENCH.md, each against its reference in one run:
+
+    python python/bench.py read  [--n 64000]               # reading the state of N bodies
+    python python/bench.py step  [--n 16000] [--threads 2]  # step() against `rigid bench`, interleaved
+    python python/bench.py sweep [--points 100]             # Ray against the local backend
+
+Run it with the venv of python/test.sh (target/python-venv/bin/python) from the repository root.
+"""
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import time
+from pathlib import Path
+
+import rigid_sandbox as rs
+
+ROOT = Path(__file__).resolve().parents[1]
+RIGID = ROOT / "target" / "release" / "rigid"
+
+
+def bench_read(a):
+    sim = rs.Sim.bench("box-gas", n=a.n)
+    sim.step(1)
+    times = []
+    for _ in range(a.repeats):
+        start = time.perf_counter()
+        state = (sim.positions, sim.orientations, sim.velocities, sim.angular_velocities)
+        times.append(time.perf_counter() - start)
+    rows = sum(len(x) for x in state)
+    ms = [t * 1e3 for t in times]
+    print(f"box-gas {a.n}: {len(sim)} bodies, 4 arrays ({rows} rows) read {a.repeats} times: "
+          f"median {statistics.median(ms):.3f} ms, min {min(ms):.3f} ms, max {max(ms):.3f} ms")
+    start = time.perf_counter()
+    sim.state()
+    print(f"for scale, sim.state() (the --out document as a dict): {(time.perf_counter() - start) * 1e3:.1f} ms")
+
+
+def cli_step_ms(a):
+    args = [RIGID, "bench", "box-gas", "--actors", a.n, "--threads", a.threads, "--steps", a.steps,
+            "--warmup", a.warmup, "--json"]
+    done = subprocess.run(list(map(str, args)), capture_output=True, text=True, check=True)
+    return json.loads(done.stdout.splitlines()[-1])["median_ms_per_step"]
+
+
+def python_step_ms(a):
+    sim = rs.Sim.bench("box-gas", n=a.n, threads=a.threads)
+    sim.step(a.warmup)
+    times = []
+    for _ in range(a.steps):
+        start = time.perf_counter()
+        sim.step()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times) * 1e3
+
+
+def bench_step(a):
+    cli, py = [], []
+    for k in range(a.rounds):
+        # Interleaved, so a change in the machine's load falls on both alike.
+        cli.append(cli_step_ms(a))
+        py.append(python_step_ms(a))
+        print(f"round {k + 1}: rigid bench {cli[-1]:.3f} ms/step, Python step() {py[-1]:.3f} ms/step")
+    c, p = statistics.median(cli), statistics.median(py)
+    print(f"box-gas {a.n}, {a.threads} threads, medians of {a.rounds} rounds of {a.steps} steps: "
+          f"rigid bench {c:.3f} ms, Python {p:.3f} ms, ratio {p / c:.4f}")
+
+
+def bench_sweep(a):
+    import ray
+
+    seeds = max(1, a.points // 10)
+    grid = {"spawners[1].actor.restitution": [round(0.1 * k, 1) for k in range(10)],
+            "spawners[1].seed": list(range(1, seeds + 1))}
+    scene = ROOT / "scenes" / "spawners.ron"
+    start = time.perf_counter()
+    rs.run(scene, steps=a.steps, threads=1)
+    print(f"one point: {a.steps} steps of {scene.name} on one thread: {time.perf_counter() - start:.3f} s")
+    start = time.perf_counter()
+    local = rs.sweep(scene, grid, steps=a.steps, backend="local", threads=a.cpus)
+    t_local = time.perf_counter() - start
+    start = time.perf_counter()
+    ray.init(num_cpus=a.cpus, include_dashboard=False, log_to_driver=False)
+    t_init = time.perf_counter() - start
+    runs = []
+    for _ in range(2):  # the first starts the workers, the second finds them running
+        start = time.perf_counter()
+        on_ray = rs.sweep(scene, grid, steps=a.steps, backend="ray")
+        runs.append(time.perf_counter() - start)
+    ray.shutdown()
+    assert on_ray == local, "Ray and local results differ"
+    print(f"{len(local)} points, {a.cpus} CPUs: local {t_local:.2f} s; ray.init {t_init:.2f} s; "
+          f"Ray first sweep {runs[0]:.2f} s ({runs[0] / t_local:.3f}x), second {runs[1]:.2f} s "
+          f"({runs[1] / t_local:.3f}x); results identical")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="what", required=True)
+    r = sub.add_parser("read")
+    r.add_argument("--n", type=int, default=64000)
+    r.add_argument("--repeats", type=int, default=50)
+    s = sub.add_parser("step")
+    s.add_argument("--n", type=int, default=16000)
+    s.add_argument("--threads", type=int, default=os.cpu_count())
+    s.add_argument("--steps", type=int, default=100)
+    s.add_argument("--warmup", type=int, default=20)
+    s.add_argument("--rounds", type=int, default=5)
+    w = sub.add_parser("sweep")
+    w.add_argument("--points", type=int, default=100)
+    w.add_argument("--steps", type=int, default=300)
+    w.add_argument("--cpus", type=int, default=os.cpu_count())
+    a = p.parse_args()
+    {"read": bench_read, "step": bench_step, "sweep": bench_sweep}[a.what](a)
+
+
+if __name__ == "__main__":
+    main()
