@@ -10,9 +10,11 @@ use pyo3::types::PyType;
 use rigid_sandbox::io::output::{state_hash, state_json};
 use rigid_sandbox::scene::benchmarks::{BenchScene, DEFAULT_HULL_RAIN_SUBDIVISIONS, scene_sim};
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::time::Duration;
 
-/// How long a `step` runs without the GIL before it looks for Ctrl-C.
+/// How often the thread waiting for a `step` looks for Ctrl-C.
 const SIGNAL_CHECK: Duration = Duration::from_millis(50);
 
 /// Steps sims in a rayon pool of its own, as `rigid --threads T` does: results are the same
@@ -35,27 +37,44 @@ impl Runner {
         Ok(Self { pool })
     }
 
-    /// Runs `n` steps with the GIL released. Between slices of steps it takes the GIL back to
-    /// let Ctrl-C through: then it stops at a step boundary, the steps done kept.
+    /// Runs `n` steps with the GIL released, all on one worker of the pool as `rigid` runs
+    /// them. This thread waits, taking the GIL now and then to let Ctrl-C through: the run then
+    /// stops at a step boundary, the steps done kept.
     pub fn run(&mut self, py: Python<'_>, sim: &mut rigid_sandbox::Sim, n: u64) -> PyResult<()> {
-        let mut left = n;
-        while left > 0 {
-            let pool = &self.pool;
-            let done = py.detach(|| {
-                pool.install(|| {
-                    let start = Instant::now();
-                    let mut done = 0;
-                    while done < left && (done == 0 || start.elapsed() < SIGNAL_CHECK) {
-                        sim.step()?;
-                        done += 1;
+        let stop = AtomicBool::new(false);
+        let mut interrupted = None;
+        let result = py.detach(|| {
+            let (done_tx, done_rx) = mpsc::channel();
+            self.pool.in_place_scope(|scope| {
+                let stop = &stop;
+                scope.spawn(move |_| {
+                    let mut steps = (0..n).take_while(|_| !stop.load(Ordering::Relaxed));
+                    let _ = done_tx.send(steps.try_for_each(|_| sim.step()));
+                });
+                loop {
+                    match done_rx.recv_timeout(SIGNAL_CHECK) {
+                        Ok(result) => return Ok(result),
+                        // The job panicked; the scope passes the panic on.
+                        Err(RecvTimeoutError::Disconnected) => return Err(()),
+                        Err(RecvTimeoutError::Timeout) if interrupted.is_none() => {
+                            if let Err(e) = Python::attach(|py| py.check_signals()) {
+                                interrupted = Some(e);
+                                stop.store(true, Ordering::Relaxed);
+                            }
+                        }
+                        Err(RecvTimeoutError::Timeout) => {}
                     }
-                    Ok::<u64, rigid_sandbox::error::StepError>(done)
-                })
-            });
-            left -= done.map_err(|e| SimulationError::new_err(e.to_string()))?;
-            py.check_signals()?;
+                }
+            })
+        });
+        if let Some(e) = interrupted {
+            return Err(e);
         }
-        Ok(())
+        match result {
+            Ok(Ok(())) => Ok(()),
+            Ok(Err(e)) => Err(SimulationError::new_err(e.to_string())),
+            Err(()) => Err(SimulationError::new_err("the step panicked")),
+        }
     }
 
     fn threads(&self) -> usize {

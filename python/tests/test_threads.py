@@ -53,3 +53,24 @@ def test_two_threads_step_at_once_while_python_runs():
         f"the main thread stalled {max(gaps, default=shorter):.3f} s during steps of {shorter:.3f} s"
     )
     assert sims[0].state_hash() == sims[1].state_hash()  # same scene, same bits, side by side
+
+
+def test_ctrl_c_stops_a_long_step_at_a_step_boundary():
+    import os
+    import signal
+
+    import pytest
+
+    sim = rs.Sim.bench("box-gas", n=1000, threads=1)
+    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        sim.step(10**9)
+    waited = time.perf_counter() - start
+    timer.join()
+    assert 0 < sim.steps < 10**9 and sim.time == sim.steps * sim.dt
+    assert waited < 0.3 + 2.0, f"stopped {waited - 0.3:.2f} s after Ctrl-C"
+    done = sim.steps
+    sim.step(2)  # and it goes on from there
+    assert sim.steps == done + 2

@@ -1,8 +1,8 @@
 """The Python package's numbers in BENCH.md, each against its reference in one run:
 
-    python python/bench.py read  [--n 64000]               # reading the state of N bodies
-    python python/bench.py step  [--n 16000] [--threads 2]  # step() against `rigid bench`, interleaved
-    python python/bench.py sweep [--points 100]             # Ray against the local backend
+    python benches/python.py read  [--n 64000]               # reading the state of N bodies
+    python benches/python.py step  [--n 16000] [--threads 2]  # step() against `rigid bench`, interleaved
+    python benches/python.py sweep [--points 100]             # Ray against the local backend
 
 Run it with the venv of python/test.sh (target/python-venv/bin/python) from the repository root.
 """
@@ -10,6 +10,7 @@ Run it with the venv of python/test.sh (target/python-venv/bin/python) from the 
 import argparse
 import json
 import os
+import re
 import statistics
 import subprocess
 import time
@@ -38,14 +39,26 @@ def bench_read(a):
     print(f"for scale, sim.state() (the --out document as a dict): {(time.perf_counter() - start) * 1e3:.1f} ms")
 
 
-def cli_step_ms(a):
+def cli_bench_ms(a):
+    """`rigid bench`'s median time of the schedule per step."""
     args = [RIGID, "bench", "box-gas", "--actors", a.n, "--threads", a.threads, "--steps", a.steps,
             "--warmup", a.warmup, "--json"]
     done = subprocess.run(list(map(str, args)), capture_output=True, text=True, check=True)
     return json.loads(done.stdout.splitlines()[-1])["median_ms_per_step"]
 
 
-def python_step_ms(a):
+def cli_run_ms(a):
+    """`rigid run`'s wall time of its stepping loop, per step, on scenes/box-gas.ron of N cubes."""
+    args = [RIGID, "run", ROOT / "scenes" / "box-gas.ron", "--set", f"spawners[0].actors={a.n}",
+            "--threads", a.threads, "--steps", a.steps]
+    done = subprocess.run(list(map(str, args)), capture_output=True, text=True, check=True)
+    wall = float(re.search(r"wall time ([0-9.]+) s", done.stdout).group(1))
+    return wall / a.steps * 1e3
+
+
+def python_ms(a):
+    """Python: the median of single step() calls after the warm-up (as `rigid bench` times),
+    and one step(N) call on the scene file, per step (as `rigid run` times)."""
     sim = rs.Sim.bench("box-gas", n=a.n, threads=a.threads)
     sim.step(a.warmup)
     times = []
@@ -53,19 +66,25 @@ def python_step_ms(a):
         start = time.perf_counter()
         sim.step()
         times.append(time.perf_counter() - start)
-    return statistics.median(times) * 1e3
+    sim = rs.Sim.from_file(ROOT / "scenes" / "box-gas.ron", set={"spawners[0].actors": a.n}, threads=a.threads)
+    start = time.perf_counter()
+    sim.step(a.steps)
+    return statistics.median(times) * 1e3, (time.perf_counter() - start) / a.steps * 1e3
 
 
 def bench_step(a):
-    cli, py = [], []
+    rows = []
     for k in range(a.rounds):
         # Interleaved, so a change in the machine's load falls on both alike.
-        cli.append(cli_step_ms(a))
-        py.append(python_step_ms(a))
-        print(f"round {k + 1}: rigid bench {cli[-1]:.3f} ms/step, Python step() {py[-1]:.3f} ms/step")
-    c, p = statistics.median(cli), statistics.median(py)
+        bench, run = cli_bench_ms(a), cli_run_ms(a)
+        one, many = python_ms(a)
+        rows.append((bench, one, run, many))
+        print(f"round {k + 1}: rigid bench median {bench:.3f} ms/step, Python step() median {one:.3f}; "
+              f"rigid run {run:.3f} ms/step, Python step({a.steps}) {many:.3f}")
+    bench, one, run, many = (statistics.median(col) for col in zip(*rows))
     print(f"box-gas {a.n}, {a.threads} threads, medians of {a.rounds} rounds of {a.steps} steps: "
-          f"rigid bench {c:.3f} ms, Python {p:.3f} ms, ratio {p / c:.4f}")
+          f"single steps: rigid bench {bench:.3f} ms, Python step() {one:.3f} ms, ratio {one / bench:.4f}; "
+          f"runs: rigid run {run:.3f} ms, Python step({a.steps}) {many:.3f} ms, ratio {many / run:.4f}")
 
 
 def bench_sweep(a):
@@ -78,9 +97,15 @@ def bench_sweep(a):
     start = time.perf_counter()
     rs.run(scene, steps=a.steps, threads=1)
     print(f"one point: {a.steps} steps of {scene.name} on one thread: {time.perf_counter() - start:.3f} s")
-    start = time.perf_counter()
-    local = rs.sweep(scene, grid, steps=a.steps, backend="local", threads=a.cpus)
-    t_local = time.perf_counter() - start
+    locals_ = []
+
+    def local():
+        start = time.perf_counter()
+        result = rs.sweep(scene, grid, steps=a.steps, backend="local", threads=a.cpus)
+        locals_.append(time.perf_counter() - start)
+        return result
+
+    first = local()
     start = time.perf_counter()
     ray.init(num_cpus=a.cpus, include_dashboard=False, log_to_driver=False)
     t_init = time.perf_counter() - start
@@ -90,10 +115,11 @@ def bench_sweep(a):
         on_ray = rs.sweep(scene, grid, steps=a.steps, backend="ray")
         runs.append(time.perf_counter() - start)
     ray.shutdown()
-    assert on_ray == local, "Ray and local results differ"
-    print(f"{len(local)} points, {a.cpus} CPUs: local {t_local:.2f} s; ray.init {t_init:.2f} s; "
-          f"Ray first sweep {runs[0]:.2f} s ({runs[0] / t_local:.3f}x), second {runs[1]:.2f} s "
-          f"({runs[1] / t_local:.3f}x); results identical")
+    assert on_ray == first == local(), "Ray and local results differ"
+    t_local = statistics.mean(locals_)
+    print(f"{len(first)} points, {a.cpus} CPUs: local {locals_[0]:.2f} s and {locals_[1]:.2f} s (before and "
+          f"after Ray); ray.init {t_init:.2f} s; Ray first sweep {runs[0]:.2f} s ({runs[0] / t_local:.3f}x the "
+          f"local mean), second {runs[1]:.2f} s ({runs[1] / t_local:.3f}x); results identical")
 
 
 def main():
@@ -105,7 +131,7 @@ def main():
     s = sub.add_parser("step")
     s.add_argument("--n", type=int, default=16000)
     s.add_argument("--threads", type=int, default=os.cpu_count())
-    s.add_argument("--steps", type=int, default=100)
+    s.add_argument("--steps", type=int, default=200)
     s.add_argument("--warmup", type=int, default=20)
     s.add_argument("--rounds", type=int, default=5)
     w = sub.add_parser("sweep")
