@@ -97,29 +97,31 @@ def bench_sweep(a):
     start = time.perf_counter()
     rs.run(scene, steps=a.steps, threads=1)
     print(f"one point: {a.steps} steps of {scene.name} on one thread: {time.perf_counter() - start:.3f} s")
-    locals_ = []
-
-    def local():
-        start = time.perf_counter()
-        result = rs.sweep(scene, grid, steps=a.steps, backend="local", threads=a.cpus)
-        locals_.append(time.perf_counter() - start)
-        return result
-
-    first = local()
     start = time.perf_counter()
     ray.init(num_cpus=a.cpus, include_dashboard=False, log_to_driver=False)
     t_init = time.perf_counter() - start
-    runs = []
-    for _ in range(2):  # the first starts the workers, the second finds them running
+
+    def timed(backend):
         start = time.perf_counter()
-        on_ray = rs.sweep(scene, grid, steps=a.steps, backend="ray")
-        runs.append(time.perf_counter() - start)
+        result = rs.sweep(scene, grid, steps=a.steps, backend=backend, threads=a.cpus)
+        return time.perf_counter() - start, result
+
+    cold, reference = timed("ray")  # starts the workers
+    local, on_ray = [], []
+    for k in range(a.rounds):
+        # Interleaved: the machine's load moves by 2x within a minute here.
+        t, result = timed("local")
+        local.append(t)
+        assert result == reference, "local and Ray results differ"
+        t, result = timed("ray")
+        on_ray.append(t)
+        assert result == reference, "Ray results differ between sweeps"
+        print(f"round {k + 1}: local {local[-1]:.2f} s, Ray {on_ray[-1]:.2f} s")
     ray.shutdown()
-    assert on_ray == first == local(), "Ray and local results differ"
-    t_local = statistics.mean(locals_)
-    print(f"{len(first)} points, {a.cpus} CPUs: local {locals_[0]:.2f} s and {locals_[1]:.2f} s (before and "
-          f"after Ray); ray.init {t_init:.2f} s; Ray first sweep {runs[0]:.2f} s ({runs[0] / t_local:.3f}x the "
-          f"local mean), second {runs[1]:.2f} s ({runs[1] / t_local:.3f}x); results identical")
+    lo, ra = statistics.median(local), statistics.median(on_ray)
+    print(f"{len(reference)} points of {a.steps} steps, {a.cpus} CPUs, medians of {a.rounds} rounds: local {lo:.2f} s, "
+          f"Ray {ra:.2f} s, ratio {ra / lo:.3f}; ray.init {t_init:.2f} s, first Ray sweep (starting the workers) "
+          f"{cold:.2f} s; results identical")
 
 
 def main():
@@ -138,6 +140,7 @@ def main():
     w.add_argument("--points", type=int, default=100)
     w.add_argument("--steps", type=int, default=300)
     w.add_argument("--cpus", type=int, default=os.cpu_count())
+    w.add_argument("--rounds", type=int, default=3)
     a = p.parse_args()
     {"read": bench_read, "step": bench_step, "sweep": bench_sweep}[a.what](a)
 
