@@ -1,10 +1,12 @@
 """The package gives the bits the `rigid` binary gives: the same --out document, the same hash,
 arrays equal to the document's values, and the same error messages."""
 
+import json
+
 import numpy as np
 import pytest
 import rigid_sandbox as rs
-from conftest import SCENES, rigid_error, rigid_out
+from conftest import SCENES, rigid, rigid_error, rigid_out
 
 # A resting stack (gravity, friction, the contact solver), jointed bodies (the document's
 # joints key), and many spawned bodies in a closed box.
@@ -66,6 +68,9 @@ def test_from_ron_equals_from_file_and_any_thread_count():
 
 def test_bench_scene_is_the_cli_bench_scene():
     sim = rs.Sim.bench("box-gas", n=1000, threads=1)
+    done = rigid("bench", "box-gas", "--actors", 1000, "--steps", 1, "--warmup", 0, "--json")
+    assert done.returncode == 0, done.stderr
+    assert sim.state()["totals"]["kinetic_energy"] == json.loads(done.stdout)["ke_start"]
     assert len(sim) == 1000 + 6  # the cubes, then the six walls
     assert sim.names[0] == "cube-0" and sim.dt == 1 / 60
     speeds = np.linalg.norm(sim.velocities[:1000], axis=1)
