@@ -189,17 +189,10 @@ pub(super) fn bench(args: &BenchArgs) -> Result<(), AppError> {
     }
     use crate::scene::benchmarks::BenchScene;
     let threads = rayon::current_num_threads();
-    let (scene, mut sizes) = match args.scene.as_str() {
-        "pyramid" => (BenchScene::Pyramid, args.base.clone()),
-        "rain" => (BenchScene::Rain, args.actors.clone()),
-        "pendulums" => (BenchScene::Pendulums { jointed: true }, args.actors.clone()),
-        "free-boxes" => (BenchScene::Pendulums { jointed: false }, args.actors.clone()),
-        "hull-rain" => {
-            let subdivisions = args.subdivisions.unwrap_or(DEFAULT_HULL_RAIN_SUBDIVISIONS);
-            (BenchScene::HullRain { subdivisions }, args.actors.clone())
-        }
-        _ => (BenchScene::BoxGas, args.actors.clone()),
-    };
+    let subdivisions = args.subdivisions.unwrap_or(DEFAULT_HULL_RAIN_SUBDIVISIONS);
+    // clap admits only the names `BenchScene::named` knows.
+    let scene = BenchScene::named(&args.scene, subdivisions).unwrap_or(BenchScene::BoxGas);
+    let mut sizes = if scene == BenchScene::Pyramid { args.base.clone() } else { args.actors.clone() };
     if args.subdivisions.is_some() && !matches!(scene, BenchScene::HullRain { .. }) {
         return Err(AppError::Usage(format!("bench {}: --subdivisions applies to hull-rain only", scene.name())));
     }

@@ -150,11 +150,17 @@ pub fn load_scene_set(path: Option<&Path>, sets: &[String]) -> Result<(SceneDef,
     }
     let path = path.map_or_else(|| PathBuf::from(DEMO_PATH), Path::to_path_buf);
     let text = if path == Path::new(DEMO_PATH) { DEMO_SCENE.to_string() } else { scene::read(&path)? };
-    match scene::overrides::parse_with(&text, &path, sets) {
-        Ok((def, edited)) => Ok((def, path, edited)),
-        Err(scene::overrides::SetError::Set(message)) => Err(AppError::Usage(message)),
-        Err(scene::overrides::SetError::Scene(e)) => Err(e.into()),
-    }
+    let (def, edited) = parse_scene_set(&text, &path, sets)?;
+    Ok((def, path, edited))
+}
+
+/// Scene text parsed with the `--set` overrides applied (`path` names it in errors and locates
+/// its OBJ files): the scene and the edited text, or the error `rigid run` reports.
+pub fn parse_scene_set(text: &str, path: &Path, sets: &[String]) -> Result<(SceneDef, String), AppError> {
+    scene::overrides::parse_with(text, path, sets).map_err(|e| match e {
+        scene::overrides::SetError::Set(message) => AppError::Usage(message),
+        scene::overrides::SetError::Scene(e) => e.into(),
+    })
 }
 
 pub(crate) fn print_warnings(sim: &mut Sim, path: &Path) {

@@ -209,6 +209,21 @@ pub fn pendulums_text(n: u32, jointed: bool) -> String {
 }
 
 impl BenchScene {
+    /// The scene `rigid bench` calls `name` (hull-rain's icospheres of `subdivisions`), or
+    /// `None` for a name it does not know.
+    #[must_use]
+    pub fn named(name: &str, subdivisions: u32) -> Option<Self> {
+        Some(match name {
+            "box-gas" => Self::BoxGas,
+            "pyramid" => Self::Pyramid,
+            "rain" => Self::Rain,
+            "hull-rain" => Self::HullRain { subdivisions },
+            "pendulums" => Self::Pendulums { jointed: true },
+            "free-boxes" => Self::Pendulums { jointed: false },
+            _ => return None,
+        })
+    }
+
     /// The scene's name in output.
     #[must_use]
     pub fn name(self) -> &'static str {
@@ -273,6 +288,22 @@ pub fn scene_sim(scene: BenchScene, size: u32, seed: u64) -> Sim {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_scene_is_found_by_its_name() {
+        let all = [
+            BenchScene::BoxGas,
+            BenchScene::Pyramid,
+            BenchScene::Rain,
+            BenchScene::HullRain { subdivisions: 3 },
+            BenchScene::Pendulums { jointed: true },
+            BenchScene::Pendulums { jointed: false },
+        ];
+        for scene in all {
+            assert_eq!(BenchScene::named(scene.name(), 3), Some(scene));
+        }
+        assert_eq!(BenchScene::named("box_gas", 3), None);
+    }
 
     #[test]
     fn pyramid_rows_touch_and_are_centred() {
