@@ -1,28 +1,26 @@
 //! `ccd`: continuous collision (docs/physics.md §6.7). A body that moves more than a fraction
 //! of the thinnest body's thickness in a step is swept, with its linear and angular motion,
-//! against every body its bounding sphere can reach over the step; each pair fast enough to
-//! pass through one another is advanced to its time of impact (`collision::toi`), given the
-//! corrected impulse of §2.5 (with the pair's restitution, and Coulomb friction) there, and
-//! flies on. Impacts are taken earliest first, so chains within a step come out in order.
+//! along the path the earlier stages give it, against every body it can reach over the step;
+//! each pair fast enough to pass through one another is advanced to its time of impact
+//! (`collision::toi`), given the corrected impulse of §2.5 (with the pair's restitution, and
+//! Coulomb friction) there, and flies on. Impacts are taken earliest first, so chains within a
+//! step come out in order.
 //!
 //! The bodies it moves are left at their last impact, with the time they have flown:
 //! `integrate` moves them through the rest of the step. When no body is that fast (every
-//! case of §4, the benchmark scenes) it looks at each body's speed once and does nothing else.
-//!
-//! It takes the pairs `resolve` answers. Under gravity (a positive restitution threshold)
-//! every contact is `solve`'s, whose speculative contacts hold a pair before it meets (§6.3),
-//! and bodies `solve` or a joint moves this step are left to it.
+//! case of §4, box-gas) it looks at each body's speed once and does nothing else.
 
+use crate::collision::contact::Pair;
 use crate::collision::manifold::ClipScratch;
 use crate::collision::posed::Posed;
 use crate::collision::toi::{Approach, impact_contact, time_of_impact};
 use crate::math::{Mat3, Scalar, Vector, exp_map};
-use crate::model::components::Pose;
+use crate::model::components::{ActorIndex, Pose};
 use crate::model::mesh::{MeshId, MeshTable};
 use crate::sim::bodies::{Bodies, rotate_tensor};
 use crate::sim::context::StepContext;
 use crate::solver::Joints;
-use crate::systems::{collision_impulse, state};
+use crate::systems::{collision_impulse, rotate_free, state};
 use hecs::World;
 
 /// A pair is swept when the two bodies travel more than this share of the thinner one's
@@ -35,8 +33,9 @@ pub const FAST_FRACTION: Scalar = 0.4;
 /// apart, so the discrete tests of the next step see no overlap to answer a second time.
 pub const IMPACT_GAP: Scalar = 0.005;
 
-/// Most impacts per swept pair and step: a body squeezed between two walls bounces on.
-const IMPACTS_PER_PAIR: usize = 8;
+/// Most impacts per body and step: a body squeezed between two walls bounces on, and a crowd
+/// struck by a bullet passes the blow on; past this a body is left to the discrete tests.
+const IMPACTS_PER_BODY: u32 = 8;
 
 /// One pair being swept, `a < b`, and its next impact time, if any.
 #[derive(Clone, Copy, Debug)]
@@ -53,9 +52,16 @@ pub struct CcdScratch {
     active: bool,
     /// Time [s] each body has flown this step under `ccd` (0 for bodies it left alone).
     taken: Vec<Scalar>,
-    /// Bodies `ccd` leaves alone this step (moved by `solve` or a joint).
-    excluded: Vec<bool>,
-    /// Bodies whose reach has been searched for pairs.
+    /// Each body's pose at the start of the step.
+    start: Vec<Pose>,
+    /// Body i had an impact: it flies freely from its pose at `taken[i]`.
+    flown: Vec<bool>,
+    /// Impacts of each body this step.
+    impacts: Vec<u32>,
+    /// Bodies faster than the cheap bound, and those whose reach has been searched.
+    mover: Vec<bool>,
+    /// Bodies a joint holds: `solve` answers their contacts with their joints.
+    jointed: Vec<bool>,
     searched: Vec<bool>,
     pairs: Vec<Swept>,
     clip: ClipScratch,
@@ -71,15 +77,16 @@ impl CcdScratch {
 
 /// Sweeps the fast bodies to their impacts (see the module docs).
 ///
-/// - Reads: `ctx.bodies`, `ctx.pairs` (to leave `solve`'s bodies alone), the joints.
+/// - Reads: `ctx.bodies`, `ctx.pairs`, the joints, and the world's poses: where each body
+///   stood when the step began (`solve` may have moved it since).
 /// - Writes: `ctx.bodies` poses and velocities of the bodies it moves, `ctx.stats.impulses`,
 ///   its `CcdScratch` (how long each moved body has flown).
 /// - Paper: none (its §5 limit; "beyond the paper", docs/physics.md §6.7).
-/// - Cost: O(N) a step; with k fast bodies O(N·k) more, and O(advances) per impact.
-pub fn ccd(_world: &mut World, ctx: &mut StepContext) {
+/// - Cost: O(N) a step; with k fast bodies O(P + N·k) more, and O(advances) per impact.
+pub fn ccd(world: &mut World, ctx: &mut StepContext) {
     let s = ctx.scratch.get_mut::<CcdScratch>();
     (s.step, s.active) = (ctx.step, false);
-    if !ctx.params.ccd || ctx.params.resting_contacts(ctx.dt, 0.0) {
+    if !ctx.params.ccd {
         return;
     }
     let speed = 0.5 * FAST_FRACTION * thinnest(&ctx.meshes) / ctx.dt;
@@ -87,12 +94,8 @@ pub fn ccd(_world: &mut World, ctx: &mut StepContext) {
         return;
     }
     let mut s = std::mem::take(ctx.scratch.get_mut::<CcdScratch>());
-    prepare(ctx, &mut s);
-    for i in 0..ctx.bodies.len() {
-        if faster(&ctx.bodies, i, speed) && !s.excluded[i] {
-            search(ctx, &mut s, i);
-        }
-    }
+    prepare(world, ctx, &mut s, speed);
+    candidates(ctx, &mut s);
     impacts(ctx, &mut s, speed);
     *ctx.scratch.get_mut::<CcdScratch>() = s;
 }
@@ -111,79 +114,113 @@ fn faster(b: &Bodies, i: usize, speed: Scalar) -> bool {
     (v2 > half || w2 > half) && b.inv_mass[i] != 0.0 && v2.sqrt() + w2.sqrt() > speed
 }
 
-/// Clears the step's state and marks the bodies `solve` may move (open pairs with friction,
-/// which it holds) and the jointed ones: their poses are `solve`'s.
-fn prepare(ctx: &StepContext, s: &mut CcdScratch) {
-    let n = ctx.bodies.len();
-    for v in [&mut s.excluded, &mut s.searched] {
+/// Clears the step's state, marks the movers and reads where each body began the step: the
+/// world still holds the poses the step loaded.
+fn prepare(world: &World, ctx: &StepContext, s: &mut CcdScratch, speed: Scalar) {
+    let (b, n) = (&ctx.bodies, ctx.bodies.len());
+    s.mover.clear();
+    s.mover.extend((0..n).map(|i| faster(b, i, speed)));
+    for v in [&mut s.searched, &mut s.flown, &mut s.jointed] {
         v.clear();
         v.resize(n, false);
     }
     s.taken.clear();
     s.taken.resize(n, 0.0);
-    s.pairs.clear();
-    let b = &ctx.bodies;
-    let open = |p: &&crate::collision::contact::Pair| p.contact().is_some() || p.is_candidate() || p.is_near();
-    for p in ctx.pairs.iter().filter(open) {
-        if ctx.params.resting_contacts(ctx.dt, b.pair_friction(p.a as usize, p.b as usize)) {
-            (s.excluded[p.a as usize], s.excluded[p.b as usize]) = (true, true);
-        }
+    s.impacts.clear();
+    s.impacts.resize(n, 0);
+    s.start.clear();
+    s.start.resize(n, Pose::IDENTITY);
+    for (index, pose) in world.query::<(&ActorIndex, &Pose)>().iter() {
+        s.start[index.0 as usize] = *pose;
     }
+    s.pairs.clear();
     if let Some(joints) = ctx.scratch.get::<Joints>() {
         for i in joints.joints.iter().flat_map(|j| std::iter::once(j.a).chain(j.b)) {
-            s.excluded[i as usize] = true;
+            s.jointed[i as usize] = true;
         }
     }
 }
 
-/// Adds the pairs of body `i` (flying from its time so far) with every body its swept sphere
-/// can reach within the step, when the two together travel fast enough to pass through.
-fn search(ctx: &StepContext, s: &mut CcdScratch, i: usize) {
-    s.searched[i] = true;
-    let (b, dt) = (&ctx.bodies, ctx.dt);
-    let sphere = |k: usize| {
-        let rest = b.velocity[k] * (dt - s.taken[k]);
-        (b.position[k] + 0.5 * rest, b.radius[k] + 0.5 * rest.length())
-    };
-    let travel = |k: usize| (b.velocity[k].length() + b.angular_velocity[k].length() * b.radius[k]) * dt;
-    let (ci, ri) = sphere(i);
-    for j in (0..b.len()).filter(|&j| j != i && !s.excluded[j]) {
-        // A box about j's swept sphere first (no square root): most bodies are far.
-        let rest = b.velocity[j] * (dt - s.taken[j]);
-        let d = ci - (b.position[j] + 0.5 * rest);
-        if d.abs().max_element() > ri + b.radius[j] + 0.5 * rest.abs().element_sum() {
-            continue;
-        }
-        let (cj, rj) = sphere(j);
-        if (ci - cj).length() > ri + rj || travel(i) + travel(j) <= FAST_FRACTION * b.thinner(&ctx.meshes, i, j) {
-            continue;
-        }
-        let key = (i.min(j) as u32, i.max(j) as u32);
-        if !s.pairs.iter().any(|p| (p.a, p.b) == key) {
-            s.pairs.push(Swept { a: key.0, b: key.1, next: None });
-            let k = s.pairs.len() - 1;
-            s.pairs[k].next = next_impact(ctx, s, k);
+/// The swept pairs: a mover with a speculative distance (under gravity or friction) finds
+/// every body it may reach among the step's pairs, which the broad phase widened by that
+/// distance; any other mover searches all bodies.
+fn candidates(ctx: &StepContext, s: &mut CcdScratch) {
+    let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
+    let widened = |i: usize| params.speculative_distance(dt, b, i) > 0.0;
+    for i in 0..b.len() {
+        if s.mover[i] && !widened(i) {
+            search(ctx, s, i);
         }
     }
+    let listed = |p: &&Pair| [p.a, p.b].iter().any(|&i| s.mover[i as usize] && widened(i as usize));
+    let found: Vec<(u32, u32)> = ctx.pairs.iter().filter(listed).map(|p| (p.a, p.b)).collect();
+    for (a, c) in found {
+        consider(ctx, s, a as usize, c as usize);
+    }
+    s.pairs.sort_unstable_by_key(|p| (p.a, p.b));
+    s.pairs.dedup_by_key(|p| (p.a, p.b));
+    for k in 0..s.pairs.len() {
+        s.pairs[k].next = next_impact(ctx, s, k);
+    }
+}
+
+/// Adds the pairs of body `i` with every body whose swept sphere meets its own.
+fn search(ctx: &StepContext, s: &mut CcdScratch, i: usize) {
+    s.searched[i] = true;
+    for j in (0..ctx.bodies.len()).filter(|&j| j != i) {
+        consider(ctx, s, i, j);
+    }
+}
+
+/// Adds pair (i, j) when the two may meet within the step (their bounding spheres swept along
+/// their centres' paths over the rest of it meet) and travel fast enough to pass through each
+/// other; not a jointed body's (its joints and contacts are solved together, by `solve`).
+fn consider(ctx: &StepContext, s: &mut CcdScratch, i: usize, j: usize) {
+    let (b, dt) = (&ctx.bodies, ctx.dt);
+    if s.jointed[i] || s.jointed[j] {
+        return;
+    }
+    let sphere = |k: usize| {
+        let from = if s.flown[k] { b.position[k] } else { s.start[k].position };
+        let to = b.position[k] + b.velocity[k] * (dt - s.taken[k]);
+        (0.5 * (from + to), b.radius[k] + 0.5 * (to - from).abs().element_sum())
+    };
+    let ((ci, ri), (cj, rj)) = (sphere(i), sphere(j));
+    // Box about the spheres (no square root): most bodies are far.
+    if (ci - cj).abs().max_element() > ri + rj || (ci - cj).length() > ri + rj {
+        return;
+    }
+    let travel = |k: usize| (b.velocity[k].length() + b.angular_velocity[k].length() * b.radius[k]) * dt;
+    let key = (i.min(j) as u32, i.max(j) as u32);
+    if b.is_fixed(i) && b.is_fixed(j) || travel(i) + travel(j) <= FAST_FRACTION * b.thinner(&ctx.meshes, i, j) {
+        return;
+    }
+    s.pairs.push(Swept { a: key.0, b: key.1, next: None });
 }
 
 /// The impacts of the step, earliest first (ties in pair order), each followed by a fresh
 /// look at the pairs of its two bodies, and a search from a body the impact made fast.
 fn impacts(ctx: &mut StepContext, s: &mut CcdScratch, speed: Scalar) {
-    let mut count = 0;
-    while count < IMPACTS_PER_PAIR * s.pairs.len() {
+    loop {
         let earliest = s.pairs.iter().filter_map(|p| p.next.map(|t| (t, p.a, p.b)));
         let Some((t, a, b)) = earliest.min_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2)))) else {
             break;
         };
-        count += 1;
-        for i in [a, b] {
-            fly(&mut ctx.bodies, &mut s.taken, i as usize, t);
+        for i in [a as usize, b as usize] {
+            fly(ctx, s, i, t);
+            s.impacts[i] += 1;
         }
         collide(ctx, s, a as usize, b as usize);
         for i in [a as usize, b as usize] {
             if !s.searched[i] && faster(&ctx.bodies, i, speed) {
+                let known = s.pairs.len();
                 search(ctx, s, i);
+                let added: Vec<Swept> = s.pairs.drain(known..).collect();
+                for p in added {
+                    if !s.pairs.iter().any(|q| (q.a, q.b) == (p.a, p.b)) {
+                        s.pairs.push(p);
+                    }
+                }
             }
         }
         for k in 0..s.pairs.len() {
@@ -195,37 +232,65 @@ fn impacts(ctx: &mut StepContext, s: &mut CcdScratch, speed: Scalar) {
     s.active = s.taken.iter().any(|&t| t > 0.0);
 }
 
-/// Body `i`'s pose and spin after flying freely for `h` [s] from where it stands: its centre
-/// straight on, its orientation turning at its present spin, the world angular momentum kept
-/// (ω recomputed from it at the new orientation, as in docs/physics.md §2.7). No point then
-/// moves faster than `|v| + |ω| ρ`, the bound the time of impact rests on.
-fn flown(b: &Bodies, i: usize, h: Scalar) -> (Pose, Vector) {
-    let (x, q, w) = (b.position[i], b.orientation[i], b.angular_velocity[i]);
-    if b.inv_mass[i] == 0.0 {
-        return (Pose { position: x, orientation: q }, w);
-    }
-    let turned = (exp_map(w * h) * q).normalize();
-    let moments = b.principal_moments[i];
-    let w = if moments.x == moments.y && moments.y == moments.z {
-        w
-    } else {
-        let (before, after) = (q * b.principal_axes[i], turned * b.principal_axes[i]);
-        let l = before * (moments * (before.inverse() * w));
-        after * ((after.inverse() * l) / moments)
-    };
-    (Pose { position: x + b.velocity[i] * h, orientation: turned }, w)
+/// How a body moves through the step: from `pose` at time `t0`, its centre at `v`, turning at
+/// `w` (`exp(w·t)`), so no point moves faster than `|v| + |w| ρ`, the bound the time of impact
+/// rests on.
+#[derive(Clone, Copy, Debug)]
+struct Path {
+    t0: Scalar,
+    pose: Pose,
+    v: Vector,
+    w: Vector,
 }
 
-/// Moves free body `i` on to time `t` of the step.
-fn fly(b: &mut Bodies, taken: &mut [Scalar], i: usize, t: Scalar) {
-    if b.inv_mass[i] == 0.0 || t <= taken[i] {
+impl Path {
+    fn at(&self, t: Scalar) -> Pose {
+        let h = t - self.t0;
+        Pose {
+            position: self.pose.position + self.v * h,
+            orientation: (exp_map(self.w * h) * self.pose.orientation).normalize(),
+        }
+    }
+}
+
+/// Body `i`'s path: a fixed body stays; one that had an impact flies on from it at its
+/// velocities; any other goes from where it began the step to where `integrate` will put it,
+/// straight and at one rate of turn, which is the path `solve`'s and `correct`'s moves imply.
+fn path(b: &Bodies, s: &CcdScratch, dt: Scalar, i: usize) -> Path {
+    let here = Pose { position: b.position[i], orientation: b.orientation[i] };
+    if b.inv_mass[i] == 0.0 {
+        return Path { t0: 0.0, pose: here, v: Vector::ZERO, w: Vector::ZERO };
+    }
+    if s.flown[i] {
+        return Path { t0: s.taken[i], pose: here, v: b.velocity[i], w: b.angular_velocity[i] };
+    }
+    let start = s.start[i];
+    let (end, _) =
+        rotate_free(here.orientation, b.angular_velocity[i], b.principal_axes[i], b.principal_moments[i], dt);
+    let turn = end * start.orientation.inverse();
+    let turn = if turn.w < 0.0 { -turn } else { turn };
+    let v = (here.position + b.velocity[i] * dt - start.position) / dt;
+    Path { t0: 0.0, pose: start, v, w: turn.to_scaled_axis() / dt }
+}
+
+/// Moves free body `i` along its path to time `t` of the step. On a free flight its world
+/// angular momentum is kept: ω is recomputed from it at the new orientation (§2.7).
+fn fly(ctx: &mut StepContext, s: &mut CcdScratch, i: usize, t: Scalar) {
+    let b = &mut ctx.bodies;
+    if b.inv_mass[i] == 0.0 || (s.flown[i] && t <= s.taken[i]) {
         return;
     }
-    let (pose, w) = flown(b, i, t - taken[i]);
-    (b.position[i], b.orientation[i], b.angular_velocity[i]) = (pose.position, pose.orientation, w);
+    let pose = path(b, s, ctx.dt, i).at(t);
+    let moments = b.principal_moments[i];
+    if s.flown[i] && !(moments.x == moments.y && moments.y == moments.z) {
+        let (before, after) = (b.orientation[i] * b.principal_axes[i], pose.orientation * b.principal_axes[i]);
+        let l = before * (moments * (before.inverse() * b.angular_velocity[i]));
+        b.angular_velocity[i] = after * ((after.inverse() * l) / moments);
+    }
+    (b.position[i], b.orientation[i]) = (pose.position, pose.orientation);
     b.rotation[i] = Mat3::from_quat(pose.orientation);
     b.inv_inertia_world[i] = rotate_tensor(pose.orientation, b.inv_inertia_body[i]);
-    taken[i] = t;
+    (s.taken[i], s.flown[i]) = (t, true);
 }
 
 /// When swept pair `k` next comes within the impact gap, from the later of its bodies'
@@ -233,15 +298,22 @@ fn fly(b: &mut Bodies, taken: &mut [Scalar], i: usize, t: Scalar) {
 fn next_impact(ctx: &StepContext, s: &CcdScratch, k: usize) -> Option<Scalar> {
     let (b, dt) = (&ctx.bodies, ctx.dt);
     let (ia, ib) = (s.pairs[k].a as usize, s.pairs[k].b as usize);
-    let start = s.taken[ia].max(s.taken[ib]);
-    let place = |t: Scalar| (flown(b, ia, t - s.taken[ia]).0, flown(b, ib, t - s.taken[ib]).0);
-    let (pa, pb) = place(start);
-    let (mut a, mut b_) =
-        (Posed::new(ctx.meshes.get_arc(b.mesh[ia]), &pa), Posed::new(ctx.meshes.get_arc(b.mesh[ib]), &pb));
-    let spin = |i: usize| if b.inv_mass[i] == 0.0 { 0.0 } else { b.angular_velocity[i].length() * b.radius[i] };
-    let approach = Approach { relative_velocity: b.velocity[ia] - b.velocity[ib], spin: spin(ia) + spin(ib) };
+    if [ia, ib].iter().any(|&i| s.impacts[i] >= IMPACTS_PER_BODY && !b.is_fixed(i)) {
+        return None;
+    }
+    let (pa, pb) = (path(b, s, dt, ia), path(b, s, dt, ib));
+    let start = pa.t0.max(pb.t0);
+    let spin = pa.w.length() * b.radius[ia] + pb.w.length() * b.radius[ib];
+    // Bounding spheres that cannot meet within the step: no search needed.
+    let apart = (pa.at(start).position - pb.at(start).position).length() - b.radius[ia] - b.radius[ib];
+    if apart > ((pa.v - pb.v).length() + spin) * (dt - start) {
+        return None;
+    }
+    let posed = |i: usize, p: &Path| Posed::new(ctx.meshes.get_arc(b.mesh[i]), &p.at(start));
+    let (mut a, mut c) = (posed(ia, &pa), posed(ib, &pb));
+    let approach = Approach { relative_velocity: pa.v - pb.v, spin };
     let gap = IMPACT_GAP * b.thinner(&ctx.meshes, ia, ib);
-    time_of_impact((&mut a, &mut b_), place, &approach, (start, dt), gap)
+    time_of_impact((&mut a, &mut c), |t| (pa.at(t), pb.at(t)), &approach, (start, dt), gap)
 }
 
 /// The impact of bodies `ia < ib`, both flown to its time: the corrected impulse (§2.5) with

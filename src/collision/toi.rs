@@ -64,7 +64,7 @@ pub fn time_of_impact(
         b.update(&pb);
         let Axis { separation, normal, .. } = contact_axis(a, b, (0.0, Scalar::INFINITY))?;
         if k == 0 {
-            if !(separation > TOUCHING * gap) {
+            if separation <= TOUCHING * gap {
                 return None;
             }
             target = target.min(0.5 * separation);
@@ -77,7 +77,7 @@ pub fn time_of_impact(
             return None;
         }
         t += (separation - target) / closing;
-        if !(t <= end) {
+        if !t.is_finite() || t > end {
             return None;
         }
     }
