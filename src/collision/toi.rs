@@ -98,3 +98,48 @@ pub fn impact_contact(a: &Posed, b: &Posed, scratch: &mut ClipScratch) -> Option
     };
     Some(Contact { point, normal: axis.normal, depth: 0.0, feature })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Quat;
+    use crate::model::mesh::ConvexMesh;
+    use std::sync::Arc;
+
+    fn cube(x: Scalar) -> Posed {
+        Posed::new(Arc::new(ConvexMesh::cuboid(Vector::ONE)), &Pose::from_position(Vector::new(x, 0.0, 0.0)))
+    }
+
+    #[test]
+    fn a_cube_closing_head_on_stops_the_gap_short_in_one_advance() {
+        // Unit cubes 3 m apart (2 m between faces), A at 10 m/s towards B: the gap g is left at
+        // t = (2 − g)/10.
+        let (mut a, mut b) = (cube(-3.0), cube(0.0));
+        let place = |t: Scalar| (Pose::from_position(Vector::new(-3.0 + 10.0 * t, 0.0, 0.0)), Pose::IDENTITY);
+        let approach = Approach { relative_velocity: Vector::new(10.0, 0.0, 0.0), spin: 0.0 };
+        let t = time_of_impact((&mut a, &mut b), place, &approach, (0.0, 1.0), 0.005).expect("they meet");
+        assert!((t - (2.0 - 0.005) / 10.0).abs() < 1e-12, "{t}");
+        // Too slow to meet within the step, or moving apart: none.
+        assert_eq!(time_of_impact((&mut a, &mut b), place, &approach, (0.0, 0.1), 0.005), None);
+        let away = Approach { relative_velocity: Vector::new(-10.0, 0.0, 0.0), spin: 0.0 };
+        assert_eq!(time_of_impact((&mut a, &mut b), place, &away, (0.0, 1.0), 0.005), None);
+    }
+
+    #[test]
+    fn a_turning_bar_is_stopped_before_it_reaches_the_cube() {
+        // A 2 × 0.1 × 0.1 bar about the origin turns at 30 rad/s about y towards a unit cube
+        // whose near face is 0.6 m off its axis: the search never passes the contact.
+        let bar = Arc::new(ConvexMesh::cuboid(Vector::new(2.0, 0.1, 0.1)));
+        let turn = |t: Scalar| Pose { position: Vector::ZERO, orientation: Quat::from_rotation_y(-30.0 * t) };
+        let (mut a, mut b) = (Posed::new(bar.clone(), &turn(0.0)), cube(0.0));
+        b.update(&Pose::from_position(Vector::new(0.0, 0.0, 1.1)));
+        let place = |t: Scalar| (turn(t), Pose::from_position(Vector::new(0.0, 0.0, 1.1)));
+        let approach = Approach { relative_velocity: Vector::ZERO, spin: 30.0 * bar.radius };
+        let t = time_of_impact((&mut a, &mut b), place, &approach, (0.0, 0.1), 0.005).expect("it hits");
+        let (pa, pb) = place(t);
+        a.update(&pa);
+        b.update(&pb);
+        let gap = contact_axis(&a, &b, (0.0, Scalar::INFINITY)).expect("an axis").separation;
+        assert!(gap > 0.0 && gap <= 0.0075, "stopped {gap} short at t = {t}");
+    }
+}
