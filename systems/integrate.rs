@@ -11,6 +11,7 @@
 use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::rotate_tensor;
 use crate::sim::context::StepContext;
+use crate::systems::CcdScratch;
 use hecs::World;
 use rayon::prelude::*;
 
@@ -45,15 +46,18 @@ pub fn rotate_free(q: Quat, omega: Vector, axes: Quat, moments: Vector, dt: Scal
     ((q_p * axes.inverse()).normalize(), omega)
 }
 
-/// Advances every non-fixed body; fixed bodies never move.
+/// Advances every non-fixed body; fixed bodies never move. A body `ccd` already moved to an
+/// impact within the step flies the rest of it from there (docs/physics.md §6.7); every other
+/// body the whole step, so without fast bodies the results are those of the plain step.
 ///
-/// - Reads: `ctx.bodies`, `ctx.dt`.
+/// - Reads: `ctx.bodies`, `ctx.dt`, the time `ccd` flew each body this step (`CcdScratch`).
 /// - Writes: `ctx.bodies` poses, velocities, world inverse inertia; marks
 ///   every body for re-posing.
 /// - Paper: integration; docs/physics.md §2.7, errata E15, E16.
 /// - Cost: O(N), in parallel, each row written by one thread.
 pub fn integrate(_world: &mut World, ctx: &mut StepContext) {
     let dt = ctx.dt;
+    let taken = ctx.scratch.get::<CcdScratch>().and_then(|s| s.taken(ctx.step));
     let b = &mut ctx.bodies;
     let rows = b.position.par_iter_mut().zip(b.orientation.par_iter_mut()).zip(b.velocity.par_iter());
     let rest = b.angular_velocity.par_iter_mut().zip(b.inv_inertia_world.par_iter_mut()).zip(b.rotation.par_iter_mut());
@@ -62,8 +66,9 @@ pub fn integrate(_world: &mut World, ctx: &mut StepContext) {
         if props.0[i] == 0.0 {
             return;
         }
-        *x += *v * dt;
-        (*q, *w) = rotate_free(*q, *w, props.1[i], props.2[i], dt);
+        let h = taken.map_or(dt, |t| dt - t[i]);
+        *x += *v * h;
+        (*q, *w) = rotate_free(*q, *w, props.1[i], props.2[i], h);
         *inv_w = rotate_tensor(*q, props.3[i]);
         *rotation = Mat3::from_quat(*q);
     });

@@ -17,8 +17,12 @@
 //! 9. `correct` — positional correction of penetration (§2.6, E14).
 //! 10. `sleep` — bodies still for half a second sleep until touched in motion (off unless
 //!     `Params::sleep`). Before `integrate`, which the paper's stages end with (docs/cli.md).
-//! 11. `integrate` — poses from velocities; angular momentum kept (§2.7, E15, E16).
+//! 11. `ccd` — bodies fast enough to pass through others are swept to their time of impact
+//!     and bounce there (§6.7); idle unless a body is that fast.
+//! 12. `integrate` — poses from velocities, through the rest of the step for bodies `ccd`
+//!     moved; angular momentum kept (§2.7, E15, E16).
 
+mod ccd;
 mod correct;
 mod cull;
 mod edge;
@@ -31,6 +35,7 @@ mod sleep;
 mod solve;
 mod vertex;
 
+pub use ccd::{CcdScratch, ccd, friction_impulse};
 pub use correct::{correct, correction};
 pub use cull::{cull, cull_all_pairs, spheres_overlap};
 pub use edge::{edge, edge_contact};
@@ -38,7 +43,7 @@ pub use face::{face, face_contact};
 pub use gravity::gravity;
 pub use integrate::{integrate, rotate_free};
 pub use prune::{prune, separated};
-pub use resolve::{BodyState, approach_speed, collision_impulse, resolve};
+pub use resolve::{BodyState, approach_speed, collision_impulse, resolve, state};
 pub use sleep::sleep;
 pub use solve::solve;
 pub use vertex::{vertex, vertex_contact};
@@ -60,12 +65,13 @@ pub const REGISTRY: &[System] = &[
     System { name: "solve", run: solve },
     System { name: "correct", run: correct },
     System { name: "sleep", run: sleep },
+    System { name: "ccd", run: ccd },
     System { name: "integrate", run: integrate },
 ];
 
 /// The default order (see the module docs).
 pub const DEFAULT_ORDER: &[&str] =
-    &["cull", "prune", "face", "vertex", "edge", "gravity", "resolve", "solve", "correct", "sleep", "integrate"];
+    &["cull", "prune", "face", "vertex", "edge", "gravity", "resolve", "solve", "correct", "sleep", "ccd", "integrate"];
 
 /// The shipped system called `name`.
 pub fn find(name: &str) -> Result<System, ScheduleError> {
@@ -82,7 +88,7 @@ pub fn schedule_of<S: AsRef<str>>(names: &[S]) -> Result<Schedule, ScheduleError
 }
 
 /// The default schedule: `cull, prune, face, vertex, edge, gravity, resolve, solve, correct,
-/// sleep, integrate`.
+/// sleep, ccd, integrate`.
 #[must_use]
 pub fn default_schedule() -> Schedule {
     schedule_of(DEFAULT_ORDER).expect("the registry holds every default name once")

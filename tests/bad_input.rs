@@ -188,7 +188,8 @@ fn warnings_flag_overlapping_starts_and_tunnelling_speeds() {
     std::fs::write(
         &scene,
         format!(
-            "Scene(actors: [Actor(name: \"a\", {CUBE}), Actor(name: \"b\", {CUBE}, position: (0.5, 0.0, 0.0)), \
+            "Scene(solver: Solver(ccd: false), \
+                 actors: [Actor(name: \"a\", {CUBE}), Actor(name: \"b\", {CUBE}, position: (0.5, 0.0, 0.0)), \
                  Actor(name: \"fast\", {CUBE}, position: (9.0, 0.0, 0.0), velocity: (100.0, 0.0, 0.0))])"
         ),
     )

@@ -26,7 +26,10 @@ fn write(dir: &tempfile::TempDir, name: &str, contents: &str) -> String {
 fn systems_prints_the_default_order() {
     let o = rigid(&["systems"]);
     assert!(o.status.success());
-    assert_eq!(text(&o).0, "cull\nprune\nface\nvertex\nedge\ngravity\nresolve\nsolve\ncorrect\nsleep\nintegrate\n");
+    assert_eq!(
+        text(&o).0,
+        "cull\nprune\nface\nvertex\nedge\ngravity\nresolve\nsolve\ncorrect\nsleep\nccd\nintegrate\n"
+    );
 }
 
 #[test]

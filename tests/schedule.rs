@@ -27,7 +27,20 @@ fn default_order_is_the_papers() {
     let names = systems::default_schedule().names();
     assert_eq!(
         names,
-        ["cull", "prune", "face", "vertex", "edge", "gravity", "resolve", "solve", "correct", "sleep", "integrate"]
+        [
+            "cull",
+            "prune",
+            "face",
+            "vertex",
+            "edge",
+            "gravity",
+            "resolve",
+            "solve",
+            "correct",
+            "sleep",
+            "ccd",
+            "integrate"
+        ]
     );
 }
 
@@ -51,6 +64,7 @@ fn insert_replace_remove_by_name() {
             "solve",
             "correct",
             "sleep",
+            "ccd",
             "integrate",
             "freeze"
         ]

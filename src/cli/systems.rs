@@ -18,6 +18,7 @@ const ABOUT: &[(&str, &str)] = &[
     ("solve", "resting contact, friction, impacts under gravity, and joints (the contact solver)"),
     ("correct", "pushes remaining penetration out along the contact normal"),
     ("sleep", "still bodies stop being simulated until touched (off unless solver.sleep)"),
+    ("ccd", "fast bodies swept to their time of impact, so none passes through another"),
     ("integrate", "poses from velocities; angular momentum kept in free flight"),
 ];
 

@@ -5,3 +5,4 @@ pub mod contact;
 pub mod hull;
 pub mod manifold;
 pub mod posed;
+pub mod toi;

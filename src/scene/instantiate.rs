@@ -68,6 +68,7 @@ pub fn params(scene: &SceneDef) -> Params {
         iterations: scene.solver.iterations,
         sleep: scene.solver.sleep,
         restitution_threshold: scene.solver.restitution_threshold,
+        ccd: scene.solver.ccd,
         ..Params::default()
     }
 }

@@ -463,6 +463,9 @@ pub fn apply_to_sim(sim: &mut Sim, sets: &[String]) -> Result<(), String> {
     if is("restitution_threshold") {
         p.restitution_threshold = given.restitution_threshold;
     }
+    if is("ccd") {
+        p.ccd = given.ccd;
+    }
     Ok(())
 }
 

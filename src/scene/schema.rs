@@ -103,6 +103,9 @@ pub struct SolverDef {
     pub sleep: bool,
     /// Approach speed [m/s] above which contacts bounce (default 2|g|·dt).
     pub restitution_threshold: Option<Scalar>,
+    /// Continuous collision: fast bodies are swept to their time of impact (the `ccd` system;
+    /// default true). False: the paper's discrete model.
+    pub ccd: bool,
 }
 
 impl Default for SolverDef {
@@ -116,6 +119,7 @@ impl Default for SolverDef {
             iterations: p.iterations,
             sleep: p.sleep,
             restitution_threshold: p.restitution_threshold,
+            ccd: p.ccd,
         }
     }
 }

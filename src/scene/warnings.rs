@@ -1,6 +1,6 @@
-//! Warnings for scenes that will misbehave (issue #7): actors that start overlapping, and
-//! actors fast enough to tunnel (docs/physics.md §5). `rigid check` and `rigid run` print them;
-//! they do not stop a run.
+//! Warnings for scenes that will misbehave (issue #7): actors that start overlapping, and,
+//! without continuous collision, actors fast enough to tunnel (docs/physics.md §5). `rigid
+//! check` and `rigid run` print them; they do not stop a run.
 
 use crate::math::Scalar;
 use crate::sim::Sim;
@@ -64,7 +64,12 @@ fn overlaps(sim: &mut Sim) -> Vec<String> {
     out
 }
 
+/// Only for the discrete model (`solver.ccd: false`): with continuous collision no body passes
+/// through another (docs/physics.md §6.7).
 fn tunnelling(sim: &Sim) -> Vec<String> {
+    if sim.ctx.params.ccd {
+        return Vec::new();
+    }
     let b = &sim.ctx.bodies;
     let thinnest = (0..b.len()).map(|i| sim.ctx.meshes.get(b.mesh[i]).thickness).fold(Scalar::INFINITY, Scalar::min);
     let limit = TUNNEL_FRACTION * thinnest;

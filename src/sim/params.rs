@@ -38,6 +38,10 @@ pub struct Params {
     /// of the thinner one's thickness: `prune` keeps such pairs and `solve` holds them
     /// (speculatively), so a stack does not lose a contact to a micro-bounce.
     pub contact_margin: Scalar,
+    /// Continuous collision (the `ccd` system, docs/physics.md §6.7): a body fast enough to pass
+    /// through another in one step is swept to its time of impact. Off: the paper's discrete
+    /// model, in which only overlaps at the step times are seen (§5).
+    pub ccd: bool,
 }
 
 /// Substep rate [Hz] the contact solver keeps at least, unless a scene sets its substeps: 4
@@ -120,6 +124,7 @@ impl Default for Params {
             iterations: 2,
             sleep: false,
             contact_margin: 0.02,
+            ccd: true,
         }
     }
 }

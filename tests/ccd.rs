@@ -1,0 +1,266 @@
+//! Continuous collision (docs/physics.md §6.7): fast bodies are caught whatever their speed or
+//! spin, with and without gravity, momentum is kept and e = 1 keeps speeds; `ccd: false` is
+//! the old discrete model, which tunnels and warns.
+
+mod common;
+use common::*;
+use rigid_sandbox::collision::manifold::contact_axis_all;
+use rigid_sandbox::collision::posed::Posed;
+use rigid_sandbox::io::output::state_hash;
+use rigid_sandbox::math::Vector;
+use rigid_sandbox::model::components::{Material, Pose, Velocity};
+use rigid_sandbox::model::mesh::ConvexMesh;
+use rigid_sandbox::sim::{BodyDef, Sim};
+use std::process::{Command, Output};
+
+const DT: &str = "0.016666666666666666";
+
+/// The separation of actors `a` and `b` along their best separating axis [m] (< 0: overlap).
+fn separation(sim: &Sim, a: &str, b: &str) -> f64 {
+    let posed = |name: &str| {
+        let i = sim.names().iter().position(|n| n == name).expect("actor");
+        let mesh = sim.ctx.meshes.get_arc(sim.ctx.bodies.mesh[i]);
+        Posed::new(mesh, &actor(sim, name).pose)
+    };
+    contact_axis_all(&posed(a), &posed(b), (0.0, f64::INFINITY)).expect("an axis").separation
+}
+
+/// Runs `steps`, asserting after each that `a` and `b` never overlap by more than `slack` [m].
+fn run_apart(sim: &mut Sim, steps: u64, (a, b): (&str, &str), slack: f64) {
+    for _ in 0..steps {
+        sim.step().expect("finite");
+        let s = separation(sim, a, b);
+        assert!(s >= -slack, "step {}: '{a}' and '{b}' overlap by {}", sim.steps, -s);
+    }
+}
+
+fn momentum(sim: &Sim) -> Vector {
+    sim.totals().linear_momentum
+}
+
+/// A 0.2 m cube at 200 m/s towards a fixed 0.1 m wall at 60 Hz (rapier's CCD test).
+fn cube_into_wall(e: f64, gravity: bool, ccd: bool) -> Sim {
+    let g = if gravity { "(0.0, -9.81, 0.0)" } else { "(0.0, 0.0, 0.0)" };
+    sim_from_text(&format!(
+        "Scene(dt: {DT}, gravity: {g}, solver: Solver(ccd: {ccd}), actors: [
+            Actor(name: \"wall\", shape: Box(size: (0.1, 40.0, 40.0)), fixed: true, restitution: {e}),
+            Actor(name: \"cube\", shape: Box(size: (0.2, 0.2, 0.2)), position: (-2.0, 0.0, 0.0),
+                  velocity: (200.0, 0.0, 0.0), restitution: {e}),
+        ])"
+    ))
+}
+
+#[test]
+fn a_cube_at_200_m_s_stops_at_a_thin_wall_with_and_without_gravity() {
+    for gravity in [false, true] {
+        for e in [0.0, 1.0] {
+            let mut sim = cube_into_wall(e, gravity, true);
+            run_apart(&mut sim, 30, ("cube", "wall"), 1e-9);
+            let cube = actor(&sim, "cube");
+            let what = format!("e = {e}, gravity {gravity}");
+            assert!(cube.pose.position.x < -0.15, "{what}: on the near side, {}", cube.pose.position);
+            if !gravity {
+                assert!(sim.impulses.iter().sum::<u64>() >= 1, "{what}: caught");
+            }
+            if e == 1.0 {
+                assert_close(cube.velocity.linear.x, -200.0, 200.0 * 1e-6, &format!("{what}: speed kept"));
+                assert!(cube.pose.position.x < -90.0, "{what}: left at once, {}", cube.pose.position);
+            } else {
+                assert_close(cube.velocity.linear.x, 0.0, 1e-6, &format!("{what}: stopped"));
+            }
+        }
+    }
+}
+
+#[test]
+fn without_ccd_the_cube_passes_through_the_wall_and_the_scene_warns() {
+    let mut sim = cube_into_wall(1.0, false, false);
+    sim.run(30).expect("finite");
+    assert!(actor(&sim, "cube").pose.position.x > 90.0, "the discrete model tunnels");
+    assert_eq!(sim.impulses.iter().sum::<u64>(), 0);
+    let dir = tempfile::tempdir().expect("temp dir");
+    for (ccd, warns) in [("false", true), ("true", false)] {
+        let path = dir.path().join(format!("{ccd}.ron"));
+        let text = format!(
+            "Scene(solver: Solver(ccd: {ccd}), actors: [Actor(shape: Box(size: (0.1, 0.1, 0.1)), \
+             velocity: (200.0, 0.0, 0.0))])"
+        );
+        std::fs::write(&path, text).expect("scene");
+        let o = rigid(&["check", path.to_str().expect("utf-8")]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        assert_eq!(err.contains("may pass through others"), warns, "ccd: {ccd}: {err}");
+    }
+}
+
+#[test]
+fn two_cubes_head_on_at_100_m_s_swap_velocities_and_keep_momentum() {
+    let mut sim = sim_from_text(&format!(
+        "Scene(dt: {DT}, gravity: (0.0, 0.0, 0.0), actors: [
+            Actor(name: \"a\", shape: Box(size: (0.2, 0.2, 0.2)), position: (-1.3, 0.0, 0.0),
+                  velocity: (100.0, 0.0, 0.0), restitution: 1.0),
+            Actor(name: \"b\", shape: Box(size: (0.2, 0.2, 0.2)), density: 3.0, position: (1.1, 0.0, 0.0),
+                  velocity: (-100.0, 0.0, 0.0), restitution: 1.0),
+        ])"
+    ));
+    let p0 = momentum(&sim);
+    run_apart(&mut sim, 20, ("a", "b"), 1e-9);
+    let (a, b) = (actor(&sim, "a"), actor(&sim, "b"));
+    assert!(a.pose.position.x < b.pose.position.x, "a stays on its side");
+    // Masses 1 : 3 (as §4 (b)): v_a' = −200, v_b' = 0 m/s.
+    assert_close(a.velocity.linear.x, -200.0, 200.0 * 1e-6, "a");
+    assert_close(b.velocity.linear.x, 0.0, 200.0 * 1e-6, "b");
+    assert!((momentum(&sim) - p0).length() <= 1e-9 * 4.0 * 0.008 * 100.0, "{} vs {p0}", momentum(&sim));
+    let mut equal = sim_from_text(&format!(
+        "Scene(dt: {DT}, gravity: (0.0, 0.0, 0.0), actors: [
+            Actor(name: \"a\", shape: Box(size: (0.2, 0.2, 0.2)), position: (-1.3, 0.0, 0.0),
+                  velocity: (100.0, 0.0, 0.0), restitution: 1.0),
+            Actor(name: \"b\", shape: Box(size: (0.2, 0.2, 0.2)), position: (1.1, 0.0, 0.0),
+                  velocity: (-100.0, 0.0, 0.0), restitution: 1.0),
+        ])"
+    ));
+    run_apart(&mut equal, 20, ("a", "b"), 1e-9);
+    assert_close(actor(&equal, "a").velocity.linear.x, -100.0, 1e-4, "swapped");
+    assert_close(actor(&equal, "b").velocity.linear.x, 100.0, 1e-4, "swapped");
+}
+
+#[test]
+fn a_bullet_into_a_thin_free_plate_pushes_it_and_keeps_momentum() {
+    let mut sim = sim_from_text(&format!(
+        "Scene(dt: {DT}, gravity: (0.0, 0.0, 0.0), actors: [
+            Actor(name: \"plate\", shape: Box(size: (0.02, 1.0, 1.0)), mass: 2.0, restitution: 0.5),
+            Actor(name: \"bullet\", shape: Box(size: (0.03, 0.01, 0.01)), mass: 0.01, position: (-3.0, 0.1, 0.05),
+                  velocity: (600.0, 0.0, 0.0), angular_velocity: (0.0, 0.0, 40.0), restitution: 0.5),
+        ])"
+    ));
+    let p0 = momentum(&sim);
+    run_apart(&mut sim, 30, ("bullet", "plate"), 1e-9);
+    let (bullet, plate) = (actor(&sim, "bullet"), actor(&sim, "plate"));
+    assert!(
+        bullet.pose.position.x < plate.pose.position.x,
+        "bullet {} plate {}",
+        bullet.pose.position,
+        plate.pose.position
+    );
+    assert!(plate.velocity.linear.x > 2.0, "the plate took the blow: {}", plate.velocity.linear);
+    assert!((momentum(&sim) - p0).length() <= 1e-9 * p0.length(), "{} vs {p0}", momentum(&sim));
+}
+
+/// The post's side of the plank (its centre's z in the plank's frame) where the plank reaches
+/// it, else 0.
+fn side_of_post(sim: &Sim) -> f64 {
+    let (plank, post) = (actor(sim, "plank"), actor(sim, "post"));
+    let p = plank.pose.orientation.inverse() * (post.pose.position - plank.pose.position);
+    if p.x.abs() < 1.0 { p.z.signum() } else { 0.0 }
+}
+
+fn spinning_plank(gravity: &str, ccd: bool) -> Sim {
+    // The post stands 0.76 m from the axis, inside the circle the plank's ends sweep: at
+    // 60 rad/s they turn a radian a step, 20 times the plank's thickness.
+    sim_from_text(&format!(
+        "Scene(dt: {DT}, gravity: {gravity}, solver: Solver(ccd: {ccd}), actors: [
+            Actor(name: \"post\", shape: Box(size: (0.05, 40.0, 0.05)), position: (0.7, 0.0, -0.3), fixed: true,
+                  restitution: 0.5),
+            Actor(name: \"plank\", shape: Box(size: (2.0, 0.3, 0.05)), angular_velocity: (0.0, 60.0, 0.0),
+                  restitution: 0.5),
+        ])"
+    ))
+}
+
+#[test]
+fn a_plank_spinning_at_60_rad_s_hits_the_post_beside_it() {
+    for gravity in ["(0.0, 0.0, 0.0)", "(0.0, -9.81, 0.0)"] {
+        let mut sim = spinning_plank(gravity, true);
+        let mut side = side_of_post(&sim);
+        for _ in 0..30 {
+            sim.step().expect("finite");
+            let s = separation(&sim, "plank", "post");
+            assert!(s >= -1e-9, "{gravity}, step {}: overlap {s}", sim.steps);
+            // Going round the plank's end is allowed; passing straight through is not.
+            let now = side_of_post(&sim);
+            assert!(side * now >= 0.0, "{gravity}, step {}: the plank turned through the post", sim.steps);
+            side = now;
+        }
+        let spin = actor(&sim, "plank").velocity.angular.y;
+        assert!(spin < 50.0, "{gravity}: the post stopped the turn, ω_y = {spin}");
+    }
+    let mut discrete = spinning_plank("(0.0, 0.0, 0.0)", false);
+    let crossed = (0..30).any(|_| {
+        let before = side_of_post(&discrete);
+        discrete.step().expect("finite");
+        before * side_of_post(&discrete) < 0.0
+    });
+    assert!(crossed, "without ccd the plank turns through the post");
+}
+
+/// A projectile at 500 m/s inside a box-gas box (walls 1 m thick): it stays in the box.
+#[test]
+fn a_projectile_stays_inside_a_box_gas_box() {
+    let n = 64;
+    let mut sim = rigid_sandbox::scene::benchmarks::box_gas_sim(n, 1);
+    let mesh = sim.add_mesh(ConvexMesh::cuboid(Vector::splat(0.1)));
+    let half = rigid_sandbox::scene::spawners::box_gas_half_extent(n);
+    sim.spawn(&BodyDef {
+        name: "projectile".into(),
+        mesh,
+        mass: 0.05,
+        pose: Pose::from_position(Vector::new(0.0, 0.0, half - 0.3)),
+        velocity: Velocity { linear: Vector::new(170.0, 230.0, 400.0), angular: Vector::new(3.0, 50.0, 0.0) },
+        material: Material { restitution: 1.0, friction: 0.0 },
+        fixed: false,
+    });
+    let e0 = sim.totals().kinetic_energy;
+    for _ in 0..120 {
+        sim.step().expect("finite");
+        let p = actor(&sim, "projectile").pose.position;
+        assert!(p.abs().max_element() < half, "step {}: the projectile left the box at {p}", sim.steps);
+    }
+    let e1 = sim.totals().kinetic_energy;
+    assert!(((e1 - e0) / e0).abs() < 1e-3, "energy {e0} -> {e1}");
+}
+
+#[test]
+fn fast_bodies_give_the_same_bits_on_one_thread_or_two() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        pool.install(|| {
+            let mut sim = rigid_sandbox::scene::benchmarks::box_gas_sim(125, 3);
+            let mesh = sim.add_mesh(ConvexMesh::cuboid(Vector::new(0.3, 0.05, 0.1)));
+            for k in 0..6 {
+                let angle = f64::from(k);
+                sim.spawn(&BodyDef {
+                    name: format!("shot-{k}"),
+                    mesh,
+                    mass: 0.2,
+                    pose: Pose::from_position(Vector::new(0.5 * angle - 1.5, 0.3, -0.5)),
+                    velocity: Velocity {
+                        linear: Vector::new(300.0 * angle.cos(), 120.0, 300.0 * angle.sin()),
+                        angular: Vector::new(0.0, 30.0 * angle, 5.0),
+                    },
+                    material: Material { restitution: 0.8, friction: 0.3 },
+                    fixed: false,
+                });
+            }
+            sim.run(90).expect("finite");
+            assert!(sim.impulses.iter().sum::<u64>() > 0);
+            state_hash(&sim.actors())
+        })
+    };
+    assert_eq!(run(1), run(2));
+}
+
+fn rigid(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rigid")).args(args).output().expect("the binary runs")
+}
+
+#[test]
+fn a_bad_ccd_value_is_bad_input_with_line_and_column() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("bad.ron");
+    std::fs::write(&path, "Scene(\n  solver: Solver(ccd: 1.0),\n  actors: [],\n)").expect("scene");
+    let p = path.to_str().expect("utf-8");
+    let o = rigid(&["check", p]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(&format!("{p}:2:")) && !err.contains("panicked"), "{err}");
+}
