@@ -2,7 +2,7 @@
 //! (docs/physics.md §1.3, errata E2 and E3).
 
 use crate::collision::contact::{Contact, Feature, PairState};
-use crate::collision::hull::{features_near, is_many_faced, outside_near_face};
+use crate::collision::hull::{Kind, features_below, features_near, is_many_faced, outside_near_face};
 use crate::collision::posed::{Posed, depth_along, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
@@ -52,7 +52,11 @@ pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let (many, mut hint) = (is_many_faced(b), 0);
     let mut near = Vec::new();
     if is_many_faced(a) {
-        features_near(a, &reach, |c| &c.triangles, &mut near);
+        if many {
+            features_below(a, b, Kind::Triangles, &mut near);
+        } else {
+            features_near(a, &reach, (|c| &c.triangles, a.mesh.triangles.len()), &mut near);
+        }
     }
     let triangles: Box<dyn Iterator<Item = usize>> =
         if is_many_faced(a) { Box::new(near.iter().map(|&k| k as usize)) } else { Box::new(0..a.mesh.triangles.len()) };

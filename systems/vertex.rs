@@ -2,7 +2,7 @@
 //! (docs/physics.md §1.4, erratum E5).
 
 use crate::collision::contact::{Contact, Feature};
-use crate::collision::hull::{features_near, is_many_faced, outside_near_face};
+use crate::collision::hull::{Kind, features_below, features_near, is_many_faced, outside_near_face};
 use crate::collision::posed::{Posed, depth_along};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
@@ -33,7 +33,11 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     // of those most are shown outside by a face near them before all faces are tried.
     let mut near = Vec::new();
     if is_many_faced(a) {
-        features_near(a, &reach, |c| &c.vertices, &mut near);
+        if many {
+            features_below(a, b, Kind::Vertices, &mut near);
+        } else {
+            features_near(a, &reach, (|c| &c.vertices, a.mesh.vertices.len()), &mut near);
+        }
     }
     let candidates: Box<dyn Iterator<Item = &Vector>> = if is_many_faced(a) {
         Box::new(near.iter().map(|&i| &a.vertices[i as usize]))

@@ -2,6 +2,8 @@
 //! candidate pairs, and the clipped manifolds that resting contact holds.
 
 pub mod contact;
+pub mod gjk;
 pub mod hull;
 pub mod manifold;
+pub mod planes;
 pub mod posed;

@@ -208,13 +208,21 @@ impl Posed {
         let tie = FACE_TIE_TOLERANCE * self.mesh.radius;
         let toward = other.position - self.position;
         let mut chosen = (Scalar::INFINITY, Scalar::NEG_INFINITY, Vector::ZERO);
-        let (q, planes, turn) = self.planes_for(p);
-        for pl in planes.iter().filter(|pl| pl.normal.dot(q) - pl.offset >= best - tie) {
-            let normal = turn.map_or(pl.normal, |r| r * pl.normal);
-            let (depth, facing) = (depth_along(other, self, normal), normal.dot(toward));
+        // The candidates' normals are close: each walk starts where the last one ended.
+        let mut hints = [None; 2];
+        let mut consider = |normal: Vector| {
+            let (depth, facing) = (depth_along_from(other, self, normal, &mut hints), normal.dot(toward));
             if depth < chosen.0 || (depth == chosen.0 && facing > chosen.1) {
                 chosen = (depth, facing, normal);
             }
+        };
+        let (q, planes, turn) = self.planes_for(p);
+        if let Some(r) = turn {
+            let mut near = Vec::new();
+            crate::collision::planes::planes_above(&self.mesh, q, best - tie, &mut near);
+            near.iter().for_each(|&f| consider(r * self.mesh.planes[f as usize].normal));
+        } else {
+            planes.iter().filter(|pl| pl.normal.dot(q) - pl.offset >= best - tie).for_each(|pl| consider(pl.normal));
         }
         chosen.2
     }
@@ -223,7 +231,10 @@ impl Posed {
     /// tolerance, and minus it is the depth below the closest face (docs/physics.md §1.1).
     #[must_use]
     pub fn max_plane_distance(&self, p: Vector) -> Scalar {
-        let (q, planes, _) = self.planes_for(p);
+        let (q, planes, turn) = self.planes_for(p);
+        if turn.is_some() {
+            return crate::collision::planes::max_distance(&self.mesh, q);
+        }
         planes.iter().map(|pl| pl.normal.dot(q) - pl.offset).fold(Scalar::NEG_INFINITY, Scalar::max)
     }
 
@@ -274,7 +285,10 @@ fn turned(p: Plane, r: crate::math::Mat3, x: Vector) -> Plane {
 #[must_use]
 pub fn is_inside(b: &Posed, p: Vector) -> bool {
     let eps = b.tolerance();
-    let (q, planes, _) = b.planes_for(p);
+    let (q, planes, turn) = b.planes_for(p);
+    if turn.is_some() {
+        return crate::collision::planes::inside(&b.mesh, q, eps);
+    }
     planes.iter().all(|pl| pl.normal.dot(q) - pl.offset <= eps)
 }
 
@@ -303,47 +317,71 @@ pub struct Clip {
 /// ```
 #[must_use]
 pub fn clip_segment(b: &Posed, v0: Vector, v1: Vector, eps: Scalar) -> Option<Clip> {
-    let mut clip = Clip { t_in: 0.0, t_out: 1.0, plane_in: None, plane_out: None };
     let (v0, planes, turn) = b.planes_for(v0);
-    let v1 = if turn.is_some() { b.rotation.transpose() * (v1 - b.position) } else { v1 };
+    if turn.is_some() {
+        let v1 = b.rotation.transpose() * (v1 - b.position);
+        return crate::collision::planes::clip(&b.mesh, v0, v1, eps);
+    }
+    let mut clip = Clip { t_in: 0.0, t_out: 1.0, plane_in: None, plane_out: None };
     for (f, pl) in planes.iter().enumerate() {
         let d0 = pl.normal.dot(v0) - pl.offset - eps;
         let d1 = pl.normal.dot(v1) - pl.offset - eps;
-        if d0 > 0.0 && d1 > 0.0 {
-            return None;
-        }
-        if d0 > 0.0 && d1 <= 0.0 {
-            let t = d0 / (d0 - d1);
-            if t > clip.t_in {
-                clip.t_in = t;
-                clip.plane_in = Some(f);
-            }
-        } else if d0 <= 0.0 && d1 > 0.0 {
-            let t = d0 / (d0 - d1);
-            if t < clip.t_out {
-                clip.t_out = t;
-                clip.plane_out = Some(f);
-            }
-        }
-        if clip.t_in >= clip.t_out {
+        if !clip.cut(f, d0, d1) {
             return None;
         }
     }
     Some(clip)
 }
 
+impl Clip {
+    /// Cuts the clip by plane `f`, where the segment's ends are `d0` and `d1` outside it;
+    /// `false` when nothing is left. Of planes cutting at the same parameter the lowest index
+    /// is kept, whatever order they come in.
+    pub(crate) fn cut(&mut self, f: usize, d0: Scalar, d1: Scalar) -> bool {
+        if d0 > 0.0 && d1 > 0.0 {
+            return false;
+        }
+        let lower = |p: Option<usize>| p.is_some_and(|p| f < p);
+        if d0 > 0.0 && d1 <= 0.0 {
+            let t = d0 / (d0 - d1);
+            if t > self.t_in || (t == self.t_in && lower(self.plane_in)) {
+                (self.t_in, self.plane_in) = (t, Some(f));
+            }
+        } else if d0 <= 0.0 && d1 > 0.0 {
+            let t = d0 / (d0 - d1);
+            if t < self.t_out || (t == self.t_out && lower(self.plane_out)) {
+                (self.t_out, self.plane_out) = (t, Some(f));
+            }
+        }
+        self.t_in < self.t_out
+    }
+}
+
 /// Overlap of the two bodies' projections on `n` (from B to A), docs/physics.md §2.6:
 /// `max_b b·n − min_a a·n`, clamped at 0. Moving A by this along `n` separates them.
 #[must_use]
 pub fn depth_along(a: &Posed, b: &Posed, n: Vector) -> Scalar {
-    use crate::collision::hull::{is_many_faced, lowest_vertex_seeded};
+    depth_along_from(a, b, n, &mut [None; 2])
+}
+
+/// `depth_along`, a many-faced body's walk starting where `hints` says (the end of an earlier
+/// walk along a nearby direction, so only a few steps are left) and leaving its end there.
+/// The walk ends at the lowest vertex from any start, so the depth is the same.
+pub(crate) fn depth_along_from(a: &Posed, b: &Posed, n: Vector, hints: &mut [Option<u32>; 2]) -> Scalar {
+    use crate::collision::hull::{is_many_faced, lowest_vertex, lowest_vertex_seeded};
+    let walk = |p: &Posed, dir: Vector, hint: &mut Option<u32>| {
+        let (end, value) = hint.map_or_else(|| lowest_vertex_seeded(p, dir), |h| lowest_vertex(p, dir, h));
+        *hint = Some(end);
+        value
+    };
+    let [hint_a, hint_b] = hints;
     let max_b = if is_many_faced(b) {
-        -lowest_vertex_seeded(b, -n).1
+        -walk(b, -n, hint_b)
     } else {
         b.vertices.iter().map(|v| v.dot(n)).fold(Scalar::NEG_INFINITY, Scalar::max)
     };
     let min_a = if is_many_faced(a) {
-        lowest_vertex_seeded(a, n).1
+        walk(a, n, hint_a)
     } else {
         a.vertices.iter().map(|v| v.dot(n)).fold(Scalar::INFINITY, Scalar::min)
     };
