@@ -2,8 +2,10 @@
 //! (docs/physics.md §1.3, errata E2 and E3).
 
 use crate::collision::contact::{Contact, Feature, PairState};
-use crate::collision::hull::{Kind, features_below, features_near, is_many_faced, outside_near_face};
-use crate::collision::posed::{Posed, depth_along, is_inside};
+use crate::collision::hull::{
+    Hints, Kind, centre_walks, features_below, features_near, is_many_faced, outside_near_face,
+};
+use crate::collision::posed::{Posed, depth_along_from, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
 use hecs::World;
@@ -20,17 +22,19 @@ const CANCELLED_NORMAL: Scalar = 1e-6;
 /// - Paper: face test; docs/physics.md §1.3, errata E2, E3; order of §1.6.
 /// - Cost: O(F_A·F_B) per candidate pair.
 pub fn face(_world: &mut World, ctx: &mut StepContext) {
-    detect(ctx, face_contact, Feature::Face);
+    detect(ctx, face_contact_from, Feature::Face);
 }
 
 /// Runs `kernel` both ways on every candidate pair and records the first hit (docs/physics.md
 /// §1.6): the (B, A) result has its normal flipped so it still points from B to A.
-pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option<Contact>, feature: Feature) {
+/// Both ways share the walks along the line of centres (`centre_walks`).
+pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
     ctx.pose_candidates();
     let posed = &ctx.posed;
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate()).for_each(|pair| {
         let (a, b) = (posed.get(pair.a), posed.get(pair.b));
-        if let Some(contact) = kernel(a, b).or_else(|| kernel(b, a).map(Contact::flipped)) {
+        let [ha, hb] = centre_walks(a, b);
+        if let Some(contact) = kernel(a, b, [ha, hb]).or_else(|| kernel(b, a, [hb, ha]).map(Contact::flipped)) {
             pair.state = PairState::Found(contact);
         }
     });
@@ -46,6 +50,14 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option
 /// The mean of a square face's two centroids is its centre, so aligned boxes get no spin.
 #[must_use]
 pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
+    face_contact_from(a, b, [None; 2])
+}
+
+/// A detection kernel: test (A, B) one way, its walks starting at the hints (`Hints`).
+pub(crate) type Kernel = fn(&Posed, &Posed, Hints) -> Option<Contact>;
+
+/// `face_contact` with walks starting at `hints`.
+fn face_contact_from(a: &Posed, b: &Posed, hints: Hints) -> Option<Contact> {
     let (mut sum_point, mut count) = (Vector::ZERO, 0_u32);
     let (mut sum_normal, mut sum_area) = (Vector::ZERO, 0.0);
     let reach = b.reach();
@@ -53,7 +65,7 @@ pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let mut near = Vec::new();
     if is_many_faced(a) {
         if many {
-            features_below(a, b, Kind::Triangles, &mut near);
+            features_below(a, b, Kind::Triangles, &hints, &mut near);
         } else {
             features_near(a, &reach, (|c| &c.triangles, a.mesh.triangles.len()), &mut near);
         }
@@ -78,11 +90,12 @@ pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     }
     let point = sum_point / Scalar::from(count);
     let normal = if sum_normal.length() < CANCELLED_NORMAL * sum_area {
-        b.closest_face_normal(point, a)
+        b.closest_face_normal_from(point, a, hints)
     } else {
         -sum_normal.normalize()
     };
-    Some(Contact { point, normal, depth: depth_along(a, b, normal), feature: Feature::Face })
+    let depth = depth_along_from(a, b, normal, &mut hints.clone());
+    Some(Contact { point, normal, depth, feature: Feature::Face })
 }
 
 #[cfg(test)]

@@ -2,8 +2,8 @@
 //! (docs/physics.md §1.4, erratum E5).
 
 use crate::collision::contact::{Contact, Feature};
-use crate::collision::hull::{Kind, features_below, features_near, is_many_faced, outside_near_face};
-use crate::collision::posed::{Posed, depth_along};
+use crate::collision::hull::{Hints, Kind, features_below, features_near, is_many_faced, outside_near_face};
+use crate::collision::posed::{Posed, depth_along_from};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
 use hecs::World;
@@ -15,7 +15,7 @@ use hecs::World;
 /// - Paper: vertex test; docs/physics.md §1.4 and erratum E5.
 /// - Cost: O(V_A·F_B + V_B·F_A) per candidate pair.
 pub fn vertex(_world: &mut World, ctx: &mut StepContext) {
-    super::face::detect(ctx, vertex_contact, Feature::Vertex);
+    super::face::detect(ctx, vertex_contact_from, Feature::Vertex);
 }
 
 /// All vertices of `a` inside convex `b` as one contact: their mean point, the outward normal
@@ -24,6 +24,11 @@ pub fn vertex(_world: &mut World, ctx: &mut StepContext) {
 /// spinning (E5).
 #[must_use]
 pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
+    vertex_contact_from(a, b, [None; 2])
+}
+
+/// `vertex_contact` with walks starting at `hints`.
+fn vertex_contact_from(a: &Posed, b: &Posed, hints: Hints) -> Option<Contact> {
     let eps = b.tolerance();
     let (mut sum, mut count) = (Vector::ZERO, 0_u32);
     let mut deepest = (Scalar::INFINITY, Vector::ZERO);
@@ -34,7 +39,7 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let mut near = Vec::new();
     if is_many_faced(a) {
         if many {
-            features_below(a, b, Kind::Vertices, &mut near);
+            features_below(a, b, Kind::Vertices, &hints, &mut near);
         } else {
             features_near(a, &reach, (|c| &c.vertices, a.mesh.vertices.len()), &mut near);
         }
@@ -58,11 +63,11 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     if count == 0 {
         return None;
     }
-    let normal = b.closest_face_normal(deepest.1, a);
+    let normal = b.closest_face_normal_from(deepest.1, a, hints);
     Some(Contact {
         point: sum / Scalar::from(count),
         normal,
-        depth: depth_along(a, b, normal),
+        depth: depth_along_from(a, b, normal, &mut hints.clone()),
         feature: Feature::Vertex,
     })
 }

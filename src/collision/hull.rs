@@ -91,6 +91,31 @@ pub fn features_near(a: &Posed, reach: &Reach, (members, count): (fn(&Cluster) -
     set.into_sorted(out);
 }
 
+/// Where walks over the two bodies of a pair (A, B) start: a vertex of each found by an
+/// earlier walk along a nearby direction, or `None` (start from the seeds). A walk ends at the
+/// lowest vertex from any start, so hints change only how long it takes.
+pub type Hints = [Option<u32>; 2];
+
+/// The unit line of centres from `b` to `a`.
+fn centre_line(a: &Posed, b: &Posed) -> Vector {
+    (a.position - b.position).normalize_or(Vector::Y)
+}
+
+/// `lowest_vertex` from `hint`, or from the seeds without one.
+#[must_use]
+pub fn walk_from(p: &Posed, dir: Vector, hint: Option<u32>) -> (u32, Scalar) {
+    hint.map_or_else(|| lowest_vertex_seeded(p, dir), |h| lowest_vertex(p, dir, h))
+}
+
+/// Hints for the tests of pair (A, B): each many-faced body's extreme vertex along the line of
+/// centres, towards the other, which each test's walks along that line (and the normals near
+/// it) then reach in a step or two.
+#[must_use]
+pub fn centre_walks(a: &Posed, b: &Posed) -> Hints {
+    let d = centre_line(a, b);
+    [is_many_faced(a).then(|| lowest_vertex_seeded(a, d).0), is_many_faced(b).then(|| lowest_vertex_seeded(b, -d).0)]
+}
+
 /// The kinds of feature the tests gather near a contact.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
@@ -108,16 +133,16 @@ pub enum Kind {
 /// vertex of its triangle or edge; those vertices are connected over vertex neighbours on a
 /// convex hull (a level set of a linear function), so a flood from `a`'s lowest vertex along
 /// `d` finds them, visiting only them and their neighbours.
-pub fn features_below(a: &Posed, b: &Posed, kind: Kind, out: &mut Vec<u32>) {
-    let d = (a.position - b.position).normalize_or(Vector::Y);
+pub fn features_below(a: &Posed, b: &Posed, kind: Kind, hints: &Hints, out: &mut Vec<u32>) {
+    let d = centre_line(a, b);
     let high_b = if is_many_faced(b) {
-        -lowest_vertex_seeded(b, -d).1
+        -walk_from(b, -d, hints[1]).1
     } else {
         b.vertices.iter().map(|v| v.dot(d)).fold(Scalar::NEG_INFINITY, Scalar::max)
     };
     let level = high_b + BOUNDS_SLACK * b.mesh.radius;
     let m = &a.mesh;
-    let (start, low) = lowest_vertex_seeded(a, d);
+    let (start, low) = walk_from(a, d, hints[0]);
     out.clear();
     if low > level {
         return;

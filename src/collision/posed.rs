@@ -204,12 +204,18 @@ impl Posed {
     /// below its bottom face, yet the side is the contact normal.
     #[must_use]
     pub fn closest_face_normal(&self, p: Vector, other: &Self) -> Vector {
+        self.closest_face_normal_from(p, other, [None; 2])
+    }
+
+    /// `closest_face_normal` with walks over `other` and this body starting at `hints`.
+    #[must_use]
+    pub fn closest_face_normal_from(&self, p: Vector, other: &Self, hints: [Option<u32>; 2]) -> Vector {
         let best = self.max_plane_distance(p);
         let tie = FACE_TIE_TOLERANCE * self.mesh.radius;
         let toward = other.position - self.position;
         let mut chosen = (Scalar::INFINITY, Scalar::NEG_INFINITY, Vector::ZERO);
         // The candidates' normals are close: each walk starts where the last one ended.
-        let mut hints = [None; 2];
+        let mut hints = hints;
         let mut consider = |normal: Vector| {
             let (depth, facing) = (depth_along_from(other, self, normal, &mut hints), normal.dot(toward));
             if depth < chosen.0 || (depth == chosen.0 && facing > chosen.1) {
@@ -368,9 +374,9 @@ pub fn depth_along(a: &Posed, b: &Posed, n: Vector) -> Scalar {
 /// walk along a nearby direction, so only a few steps are left) and leaving its end there.
 /// The walk ends at the lowest vertex from any start, so the depth is the same.
 pub(crate) fn depth_along_from(a: &Posed, b: &Posed, n: Vector, hints: &mut [Option<u32>; 2]) -> Scalar {
-    use crate::collision::hull::{is_many_faced, lowest_vertex, lowest_vertex_seeded};
+    use crate::collision::hull::is_many_faced;
     let walk = |p: &Posed, dir: Vector, hint: &mut Option<u32>| {
-        let (end, value) = hint.map_or_else(|| lowest_vertex_seeded(p, dir), |h| lowest_vertex(p, dir, h));
+        let (end, value) = crate::collision::hull::walk_from(p, dir, *hint);
         *hint = Some(end);
         value
     };
