@@ -2,7 +2,7 @@
 //! (docs/physics.md §1.5, erratum E4).
 
 use crate::collision::contact::{Contact, Feature};
-use crate::collision::hull::{Hints, Kind, beyond_near_face, features_below, features_near, is_many_faced};
+use crate::collision::hull::{Hints, Kind, beyond_near_face, features_below, is_many_faced};
 use crate::collision::posed::{Posed, clip_segment, depth_along_from};
 use crate::math::Scalar;
 use crate::sim::context::StepContext;
@@ -43,11 +43,7 @@ fn edge_contact_from(a: &Posed, b: &Posed, hints: Hints) -> Option<Contact> {
     let (many, mut hint) = (is_many_faced(b), 0);
     let mut near = Vec::new();
     if is_many_faced(a) {
-        if many {
-            features_below(a, b, Kind::Edges, &hints, &mut near);
-        } else {
-            features_near(a, &reach, (|c| &c.edges, a.mesh.edges.len()), &mut near);
-        }
+        features_below(a, b, Kind::Edges, &hints, &mut near);
     }
     let edges: Box<dyn Iterator<Item = &[u32; 2]>> = if is_many_faced(a) {
         Box::new(near.iter().map(|&k| &a.mesh.edges[k as usize]))

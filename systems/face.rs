@@ -2,9 +2,7 @@
 //! (docs/physics.md §1.3, errata E2 and E3).
 
 use crate::collision::contact::{Contact, Feature, PairState};
-use crate::collision::hull::{
-    Hints, Kind, centre_walks, features_below, features_near, is_many_faced, outside_near_face,
-};
+use crate::collision::hull::{Hints, Kind, centre_walks, features_below, is_many_faced, outside_near_face};
 use crate::collision::posed::{Posed, depth_along_from, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
@@ -64,11 +62,7 @@ fn face_contact_from(a: &Posed, b: &Posed, hints: Hints) -> Option<Contact> {
     let (many, mut hint) = (is_many_faced(b), 0);
     let mut near = Vec::new();
     if is_many_faced(a) {
-        if many {
-            features_below(a, b, Kind::Triangles, &hints, &mut near);
-        } else {
-            features_near(a, &reach, (|c| &c.triangles, a.mesh.triangles.len()), &mut near);
-        }
+        features_below(a, b, Kind::Triangles, &hints, &mut near);
     }
     let triangles: Box<dyn Iterator<Item = usize>> =
         if is_many_faced(a) { Box::new(near.iter().map(|&k| k as usize)) } else { Box::new(0..a.mesh.triangles.len()) };

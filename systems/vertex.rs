@@ -2,7 +2,7 @@
 //! (docs/physics.md §1.4, erratum E5).
 
 use crate::collision::contact::{Contact, Feature};
-use crate::collision::hull::{Hints, Kind, features_below, features_near, is_many_faced, outside_near_face};
+use crate::collision::hull::{Hints, Kind, features_below, is_many_faced, outside_near_face};
 use crate::collision::posed::{Posed, depth_along_from};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
@@ -38,11 +38,7 @@ fn vertex_contact_from(a: &Posed, b: &Posed, hints: Hints) -> Option<Contact> {
     // of those most are shown outside by a face near them before all faces are tried.
     let mut near = Vec::new();
     if is_many_faced(a) {
-        if many {
-            features_below(a, b, Kind::Vertices, &hints, &mut near);
-        } else {
-            features_near(a, &reach, (|c| &c.vertices, a.mesh.vertices.len()), &mut near);
-        }
+        features_below(a, b, Kind::Vertices, &hints, &mut near);
     }
     let candidates: Box<dyn Iterator<Item = &Vector>> = if is_many_faced(a) {
         Box::new(near.iter().map(|&i| &a.vertices[i as usize]))

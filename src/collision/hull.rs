@@ -8,9 +8,8 @@
 //! Small meshes (a box) keep the exhaustive forms, which cost them less.
 
 use crate::collision::manifold::{Axis, PREFER, Reference};
-use crate::collision::posed::{BOUNDS_SLACK, Posed, Reach, in_box};
+use crate::collision::posed::{BOUNDS_SLACK, Posed, in_box};
 use crate::math::{Scalar, Vector};
-use crate::model::clusters::Cluster;
 
 pub use crate::collision::gjk::{distance_bound, proved_apart};
 
@@ -77,20 +76,6 @@ pub fn lowest_vertex_seeded(p: &Posed, dir: Vector) -> (u32, Scalar) {
     lowest_vertex(p, dir, start)
 }
 
-/// The features of many-faced `a` of one kind (`members` of each cluster, `count` of them in
-/// the mesh) in the clusters whose bounding sphere meets `reach`, into `out` in increasing
-/// order: the order, and so the sums, of a test over all of them. No other feature has a
-/// point within `reach`.
-pub fn features_near(a: &Posed, reach: &Reach, (members, count): (fn(&Cluster) -> &[u32], usize), out: &mut Vec<u32>) {
-    let mut set = BitSet::with_capacity(count);
-    for (c, &centre) in a.mesh.clusters.iter().zip(&a.cluster_centres) {
-        if reach.meets_sphere(centre, c.radius) {
-            set.extend(members(c));
-        }
-    }
-    set.into_sorted(out);
-}
-
 /// Where walks over the two bodies of a pair (A, B) start: a vertex of each found by an
 /// earlier walk along a nearby direction, or `None` (start from the seeds). A walk ends at the
 /// lowest vertex from any start, so hints change only how long it takes.
@@ -116,6 +101,22 @@ pub fn centre_walks(a: &Posed, b: &Posed) -> Hints {
     [is_many_faced(a).then(|| lowest_vertex_seeded(a, d).0), is_many_faced(b).then(|| lowest_vertex_seeded(b, -d).0)]
 }
 
+/// The normal of small mesh `b`'s face that many-faced `a` lies farthest beyond (or sinks
+/// least below), with `a`'s lowest vertex along it and its value: the thinnest slab of `a`
+/// a flood need visit (a ball on a floor: the floor's top, not the slanted line of centres).
+fn apart_face(a: &Posed, b: &Posed, hint: Option<u32>) -> (Vector, (u32, Scalar)) {
+    let mut best = (Vector::Y, (0, Scalar::INFINITY), Scalar::NEG_INFINITY);
+    let mut hint = hint;
+    for pl in b.all_planes() {
+        let (v, low) = walk_from(a, pl.normal, hint);
+        hint = Some(v);
+        if low - pl.offset > best.2 {
+            best = (pl.normal, (v, low), low - pl.offset);
+        }
+    }
+    (best.0, best.1)
+}
+
 /// The kinds of feature the tests gather near a contact.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
@@ -127,14 +128,20 @@ pub enum Kind {
     Edges,
 }
 
-/// The features of many-faced `a` of one kind that have a vertex no higher along the line of
-/// centres `d` (from `b` to `a`) than `b`'s highest point plus `b`'s bounds slack, into `out`
-/// in increasing order. A point of `a` inside `b` is no higher than that, and so is the lowest
+/// The features of many-faced `a` of one kind that have a vertex no higher along `d` than
+/// `b`'s highest point plus `b`'s bounds slack, into `out` in increasing order; `d` is the line
+/// of centres (from `b` to `a`) when `b` is many-faced too, else the normal of `b`'s face `a`
+/// lies farthest beyond (`apart_face`): any direction gives every feature that can touch. A point of `a` inside `b` is no higher than that, and so is the lowest
 /// vertex of its triangle or edge; those vertices are connected over vertex neighbours on a
 /// convex hull (a level set of a linear function), so a flood from `a`'s lowest vertex along
 /// `d` finds them, visiting only them and their neighbours.
 pub fn features_below(a: &Posed, b: &Posed, kind: Kind, hints: &Hints, out: &mut Vec<u32>) {
-    let d = centre_line(a, b);
+    let (d, (start, low)) = if is_many_faced(b) {
+        let d = centre_line(a, b);
+        (d, walk_from(a, d, hints[0]))
+    } else {
+        apart_face(a, b, hints[0])
+    };
     let high_b = if is_many_faced(b) {
         -walk_from(b, -d, hints[1]).1
     } else {
@@ -142,7 +149,6 @@ pub fn features_below(a: &Posed, b: &Posed, kind: Kind, hints: &Hints, out: &mut
     };
     let level = high_b + BOUNDS_SLACK * b.mesh.radius;
     let m = &a.mesh;
-    let (start, low) = walk_from(a, d, hints[0]);
     out.clear();
     if low > level {
         return;

@@ -38,14 +38,6 @@ impl Reach {
         in_box(p, self.bounds) && (p - self.centre).length_squared() <= self.radius * self.radius
     }
 
-    /// True when a sphere may meet the body.
-    #[must_use]
-    pub fn meets_sphere(&self, centre: Vector, radius: Scalar) -> bool {
-        let nearest = centre.clamp(self.bounds.0, self.bounds.1);
-        (nearest - centre).length_squared() <= radius * radius
-            && (centre - self.centre).length() <= radius + self.radius
-    }
-
     /// True when segment `p`–`q` may meet the body.
     #[must_use]
     pub fn meets_segment(&self, p: Vector, q: Vector) -> bool {
@@ -92,8 +84,6 @@ pub struct Posed {
     pub centroids: Vec<Vector>,
     /// World axis-aligned bounds of the vertices, (min, max) [m].
     pub bounds: (Vector, Vector),
-    /// World centres of the mesh's feature clusters (a many-faced mesh's), in order [m].
-    pub cluster_centres: Vec<Vector>,
 }
 
 impl Posed {
@@ -110,7 +100,6 @@ impl Posed {
             edge_directions: Vec::new(),
             centroids: Vec::new(),
             bounds: (Vector::ZERO, Vector::ZERO),
-            cluster_centres: Vec::new(),
         };
         posed.update(pose);
         posed
@@ -135,8 +124,6 @@ impl Posed {
             self.planes.set(planes).expect("taken just above");
             self.edge_directions.extend(self.mesh.edge_directions.iter().map(|&d| r * d));
         }
-        self.cluster_centres.clear();
-        self.cluster_centres.extend(self.mesh.clusters.iter().map(|c| x + r * c.centre));
         self.centroids.clear();
         if many {
             return;

@@ -92,9 +92,6 @@ pub struct ConvexMesh {
     pub vertex_all_edges: Vec<u32>,
     /// Where each vertex's edges start in `vertex_all_edges`, plus one entry for the end.
     pub vertex_all_edge_start: Vec<u32>,
-    /// The features grouped by direction, each group with a bounding sphere (empty unless the
-    /// mesh is many-faced: more than `MANY_EDGES` feature edges).
-    pub clusters: Vec<crate::model::clusters::Cluster>,
     /// The face planes grouped by normal, each group with a bound (empty unless many-faced):
     /// plane scans skip the groups that cannot matter.
     pub plane_groups: Vec<crate::model::clusters::PlaneGroup>,
@@ -156,15 +153,10 @@ impl ConvexMesh {
         let (vertex_all_edges, vertex_all_edge_start) =
             grouped(vertices.len(), edges.iter().enumerate().flat_map(|(e, &[i, j])| [(i, e as u32), (j, e as u32)]));
         let seeds = seeds(&vertices);
-        let (clusters, plane_groups) = if many_faced(&feature_edges) {
-            let clusters = crate::model::clusters::clusters(&vertices, &triangles, &edges);
-            (clusters, crate::model::clusters::plane_groups(&planes))
-        } else {
-            (Vec::new(), Vec::new())
-        };
+        let plane_groups =
+            if many_faced(&feature_edges) { crate::model::clusters::plane_groups(&planes) } else { Vec::new() };
         let mesh = Self {
             seeds,
-            clusters,
             plane_groups,
             vertices,
             triangles,
