@@ -112,9 +112,14 @@ impl Posed {
         (self.position, self.orientation, self.rotation) = (x, pose.orientation, r);
         let many = crate::collision::hull::is_many_faced(self);
         self.vertices.clear();
-        self.vertices.extend(self.mesh.vertices.iter().map(|&v| x + r * v));
-        self.bounds =
-            self.vertices.iter().fold((Vector::INFINITY, Vector::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        // The bounds grow in the same pass, in the same order as over the posed list.
+        let (mut lo, mut hi) = (Vector::INFINITY, Vector::NEG_INFINITY);
+        self.vertices.extend(self.mesh.vertices.iter().map(|&v| {
+            let w = x + r * v;
+            (lo, hi) = (lo.min(w), hi.max(w));
+            w
+        }));
+        self.bounds = (lo, hi);
         let mut planes = self.planes.take().unwrap_or_default();
         planes.clear();
         self.edge_directions.clear();
