@@ -28,18 +28,47 @@ pub fn face(_world: &mut World, ctx: &mut StepContext) {
 /// Both ways share the walks along the line of centres (`centre_walks`).
 pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
     ctx.pose_candidates();
+    let mut walks = std::mem::take(ctx.scratch.get_mut::<CentreWalks>());
+    walks.update(ctx);
     let posed = &ctx.posed;
-    ctx.pairs.par_iter_mut().filter(|p| p.is_candidate()).for_each(|pair| {
+    ctx.pairs.par_iter_mut().zip(walks.hints.par_iter()).filter(|(p, _)| p.is_candidate()).for_each(|(pair, w)| {
         let (a, b) = (posed.get(pair.a), posed.get(pair.b));
-        let [ha, hb] = centre_walks(a, b);
+        let [ha, hb] = if w.0 == (pair.a, pair.b) { w.1 } else { centre_walks(a, b) };
         if let Some(contact) = kernel(a, b, [ha, hb]).or_else(|| kernel(b, a, [hb, ha]).map(Contact::flipped)) {
             pair.state = PairState::Found(contact);
         }
     });
+    *ctx.scratch.get_mut::<CentreWalks>() = walks;
     // Only this test reports `feature`, so this counts its hits once even when a schedule runs
     // it twice; hits of earlier tests keep their own feature.
     let hits = ctx.pairs.iter().filter(|p| matches!(p.state, PairState::Found(c) if c.feature == feature)).count();
     ctx.stats.found[feature as usize] = hits as u64;
+}
+
+/// Each candidate pair's `centre_walks`, found by the first detection test of a step and
+/// shared by the others (the bodies do not move between them). Each entry names its pair; one
+/// that does not match is found afresh, so a schedule that changes the pairs between the tests
+/// only loses the sharing.
+#[derive(Default)]
+struct CentreWalks {
+    step: u64,
+    hints: Vec<((u32, u32), Hints)>,
+}
+
+impl CentreWalks {
+    fn update(&mut self, ctx: &StepContext) {
+        if self.step == ctx.step && self.hints.len() == ctx.pairs.len() {
+            return;
+        }
+        let posed = &ctx.posed;
+        self.step = ctx.step;
+        self.hints.clear();
+        let walk = |p: &crate::collision::contact::Pair| match p.is_candidate() {
+            true => ((p.a, p.b), centre_walks(posed.get(p.a), posed.get(p.b))),
+            false => ((u32::MAX, u32::MAX), [None; 2]),
+        };
+        ctx.pairs.par_iter().map(walk).collect_into_vec(&mut self.hints);
+    }
 }
 
 /// Triangles of `a` whose centroid is inside convex `b`, as one contact: the mean of those

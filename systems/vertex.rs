@@ -3,7 +3,7 @@
 
 use crate::collision::contact::{Contact, Feature};
 use crate::collision::hull::{Hints, Kind, features_below, is_many_faced, outside_near_face};
-use crate::collision::posed::{Posed, depth_along_from};
+use crate::collision::posed::{Posed, depth_along_from, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
 use hecs::World;
@@ -46,7 +46,10 @@ fn vertex_contact_from(a: &Posed, b: &Posed, hints: Hints) -> Option<Contact> {
         Box::new(a.vertices.iter())
     };
     let candidates = candidates.filter(|&&v| reach.contains(v));
-    for &v in candidates.filter(|&&v| !(many && outside_near_face(b, v, eps, &mut hint))) {
+    // On a many-faced body most candidates are outside: the point-in-mesh test leaves them at
+    // the first plane they are beyond, and only the inside ones need the largest distance.
+    let outside = |v: Vector, hint: &mut u32| many && (outside_near_face(b, v, eps, hint) || !is_inside(b, v));
+    for &v in candidates.filter(|&&v| !outside(v, &mut hint)) {
         let s = b.max_plane_distance(v);
         if s <= eps {
             sum += v;
