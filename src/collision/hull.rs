@@ -101,20 +101,16 @@ pub fn centre_walks(a: &Posed, b: &Posed) -> Hints {
     [is_many_faced(a).then(|| lowest_vertex_seeded(a, d).0), is_many_faced(b).then(|| lowest_vertex_seeded(b, -d).0)]
 }
 
-/// The normal of small mesh `b`'s face that many-faced `a` lies farthest beyond (or sinks
-/// least below), with `a`'s lowest vertex along it and its value: the thinnest slab of `a`
-/// a flood need visit (a ball on a floor: the floor's top, not the slanted line of centres).
+/// The normal of a face of small mesh `b` that many-faced `a` lies beyond, or sinks least
+/// below, with `a`'s lowest vertex along it and its value: a thin slab of `a` for a flood to
+/// visit (a ball on a floor: the floor's top, not the slanted line of centres). The face is
+/// the one whose bound on the separation (`a` reaches no more than its radius below its
+/// centre) is best, so one walk finds the vertex; any face would give the same answers.
 fn apart_face(a: &Posed, b: &Posed, hint: Option<u32>) -> (Vector, (u32, Scalar)) {
-    let mut best = (Vector::Y, (0, Scalar::INFINITY), Scalar::NEG_INFINITY);
-    let mut hint = hint;
-    for pl in b.all_planes() {
-        let (v, low) = walk_from(a, pl.normal, hint);
-        hint = Some(v);
-        if low - pl.offset > best.2 {
-            best = (pl.normal, (v, low), low - pl.offset);
-        }
-    }
-    (best.0, best.1)
+    let bound = |pl: &crate::model::mesh::Plane| pl.normal.dot(a.position) - pl.offset;
+    let best = b.all_planes().max_by(|x, y| bound(x).total_cmp(&bound(y)));
+    let n = best.map_or(Vector::Y, |pl| pl.normal);
+    (n, walk_from(a, n, hint))
 }
 
 /// The kinds of feature the tests gather near a contact.
