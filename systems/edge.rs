@@ -2,7 +2,7 @@
 //! (docs/physics.md §1.5, erratum E4).
 
 use crate::collision::contact::{Contact, Feature};
-use crate::collision::hull::{Hints, Kind, beyond_near_face, features_below, is_many_faced};
+use crate::collision::hull::{Flood, Hints, Kind, beyond_near_face, features_below, is_many_faced};
 use crate::collision::posed::{Posed, clip_segment, depth_along_from};
 use crate::math::Scalar;
 use crate::sim::context::StepContext;
@@ -33,20 +33,19 @@ pub fn edge(_world: &mut World, ctx: &mut StepContext) {
 /// (E4).
 #[must_use]
 pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
-    edge_contact_from(a, b, [None; 2])
+    edge_contact_from(a, b, [None; 2], &mut Flood::default())
 }
 
 /// `edge_contact` with walks starting at `hints`.
-fn edge_contact_from(a: &Posed, b: &Posed, hints: Hints) -> Option<Contact> {
+fn edge_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) -> Option<Contact> {
     let eps = b.tolerance();
     let reach = b.reach();
     let (many, mut hint) = (is_many_faced(b), 0);
-    let mut near = Vec::new();
     if is_many_faced(a) {
-        features_below(a, b, Kind::Edges, &hints, &mut near);
+        features_below(a, b, (Kind::Edges, &hints), flood);
     }
     let edges: Box<dyn Iterator<Item = &[u32; 2]>> = if is_many_faced(a) {
-        Box::new(near.iter().map(|&k| &a.mesh.edges[k as usize]))
+        Box::new(flood.features.iter().map(|&k| &a.mesh.edges[k as usize]))
     } else {
         Box::new(a.mesh.edges.iter())
     };

@@ -2,7 +2,7 @@
 //! (docs/physics.md §1.3, errata E2 and E3).
 
 use crate::collision::contact::{Contact, Feature, PairState};
-use crate::collision::hull::{Hints, Kind, centre_walks, features_below, is_many_faced, outside_near_face};
+use crate::collision::hull::{Flood, Hints, Kind, centre_walks, features_below, is_many_faced, outside_near_face};
 use crate::collision::posed::{Posed, depth_along_from, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
@@ -31,10 +31,12 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
     let mut walks = std::mem::take(ctx.scratch.get_mut::<CentreWalks>());
     walks.update(ctx);
     let posed = &ctx.posed;
-    ctx.pairs.par_iter_mut().zip(walks.hints.par_iter()).filter(|(p, _)| p.is_candidate()).for_each(|(pair, w)| {
+    let rows = ctx.pairs.par_iter_mut().zip(walks.hints.par_iter()).filter(|(p, _)| p.is_candidate());
+    rows.for_each_init(Flood::default, |flood, (pair, w)| {
         let (a, b) = (posed.get(pair.a), posed.get(pair.b));
         let [ha, hb] = if w.0 == (pair.a, pair.b) { w.1 } else { centre_walks(a, b) };
-        if let Some(contact) = kernel(a, b, [ha, hb]).or_else(|| kernel(b, a, [hb, ha]).map(Contact::flipped)) {
+        let contact = kernel(a, b, [ha, hb], flood).or_else(|| kernel(b, a, [hb, ha], flood).map(Contact::flipped));
+        if let Some(contact) = contact {
             pair.state = PairState::Found(contact);
         }
     });
@@ -77,26 +79,31 @@ impl CentreWalks {
 /// The mean of a square face's two centroids is its centre, so aligned boxes get no spin.
 #[must_use]
 pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
-    face_contact_from(a, b, [None; 2])
+    face_contact_from(a, b, [None; 2], &mut Flood::default())
 }
 
 /// A detection kernel: test (A, B) one way, its walks starting at the hints (`Hints`).
-pub(crate) type Kernel = fn(&Posed, &Posed, Hints) -> Option<Contact>;
+pub(crate) type Kernel = fn(&Posed, &Posed, Hints, &mut Flood) -> Option<Contact>;
 
 /// `face_contact` with walks starting at `hints`.
-fn face_contact_from(a: &Posed, b: &Posed, hints: Hints) -> Option<Contact> {
+fn face_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) -> Option<Contact> {
     let (mut sum_point, mut count) = (Vector::ZERO, 0_u32);
     let (mut sum_normal, mut sum_area) = (Vector::ZERO, 0.0);
     let reach = b.reach();
     let (many, mut hint) = (is_many_faced(b), 0);
-    let mut near = Vec::new();
-    if is_many_faced(a) {
-        features_below(a, b, Kind::Triangles, &hints, &mut near);
-    }
-    let triangles: Box<dyn Iterator<Item = usize>> =
-        if is_many_faced(a) { Box::new(near.iter().map(|&k| k as usize)) } else { Box::new(0..a.mesh.triangles.len()) };
+    // No centroid higher than `level` along `d` is inside b.
+    let (d, level) = match is_many_faced(a) {
+        true => features_below(a, b, (Kind::Triangles, &hints), flood),
+        false => (Vector::ZERO, Scalar::INFINITY),
+    };
+    let triangles: Box<dyn Iterator<Item = usize>> = if is_many_faced(a) {
+        Box::new(flood.features.iter().map(|&k| k as usize))
+    } else {
+        Box::new(0..a.mesh.triangles.len())
+    };
     for (t, centroid) in triangles.map(|k| (&a.mesh.triangles[k], a.centroid(k))) {
-        if reach.contains(centroid)
+        if centroid.dot(d) <= level
+            && reach.contains(centroid)
             && !(many && outside_near_face(b, centroid, b.tolerance(), &mut hint))
             && is_inside(b, centroid)
         {

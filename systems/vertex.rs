@@ -2,7 +2,7 @@
 //! (docs/physics.md §1.4, erratum E5).
 
 use crate::collision::contact::{Contact, Feature};
-use crate::collision::hull::{Hints, Kind, features_below, is_many_faced, outside_near_face};
+use crate::collision::hull::{Flood, Hints, Kind, features_below, is_many_faced, outside_near_face};
 use crate::collision::posed::{Posed, depth_along_from, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
@@ -24,11 +24,11 @@ pub fn vertex(_world: &mut World, ctx: &mut StepContext) {
 /// spinning (E5).
 #[must_use]
 pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
-    vertex_contact_from(a, b, [None; 2])
+    vertex_contact_from(a, b, [None; 2], &mut Flood::default())
 }
 
 /// `vertex_contact` with walks starting at `hints`.
-fn vertex_contact_from(a: &Posed, b: &Posed, hints: Hints) -> Option<Contact> {
+fn vertex_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) -> Option<Contact> {
     let eps = b.tolerance();
     let (mut sum, mut count) = (Vector::ZERO, 0_u32);
     let mut deepest = (Scalar::INFINITY, Vector::ZERO);
@@ -36,12 +36,11 @@ fn vertex_contact_from(a: &Posed, b: &Posed, hints: Hints) -> Option<Contact> {
     let (many, mut hint) = (is_many_faced(b), 0);
     // Only vertices within b's bounds can be inside it: on a many-faced body, a handful, and
     // of those most are shown outside by a face near them before all faces are tried.
-    let mut near = Vec::new();
     if is_many_faced(a) {
-        features_below(a, b, Kind::Vertices, &hints, &mut near);
+        features_below(a, b, (Kind::Vertices, &hints), flood);
     }
     let candidates: Box<dyn Iterator<Item = &Vector>> = if is_many_faced(a) {
-        Box::new(near.iter().map(|&i| &a.vertices[i as usize]))
+        Box::new(flood.features.iter().map(|&i| &a.vertices[i as usize]))
     } else {
         Box::new(a.vertices.iter())
     };

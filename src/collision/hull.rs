@@ -127,11 +127,13 @@ pub enum Kind {
 /// The features of many-faced `a` of one kind that have a vertex no higher along `d` than
 /// `b`'s highest point plus `b`'s bounds slack, into `out` in increasing order; `d` is the line
 /// of centres (from `b` to `a`) when `b` is many-faced too, else the normal of `b`'s face `a`
-/// lies farthest beyond (`apart_face`): any direction gives every feature that can touch. A point of `a` inside `b` is no higher than that, and so is the lowest
-/// vertex of its triangle or edge; those vertices are connected over vertex neighbours on a
+/// lies farthest beyond (`apart_face`): any direction gives every feature that can touch. A
+/// point of `a` inside `b` is no higher than that, and so is the lowest vertex of its triangle
+/// or edge; those vertices are connected over vertex neighbours on a
 /// convex hull (a level set of a linear function), so a flood from `a`'s lowest vertex along
-/// `d` finds them, visiting only them and their neighbours.
-pub fn features_below(a: &Posed, b: &Posed, kind: Kind, hints: &Hints, out: &mut Vec<u32>) {
+/// `d` finds them, visiting only them and their neighbours. Returns `d` and the level: no
+/// point of `a` higher along `d` can be inside `b`.
+pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scratch: &mut Flood) -> (Vector, Scalar) {
     let (d, (start, low)) = if is_many_faced(b) {
         let d = centre_line(a, b);
         (d, walk_from(a, d, hints[0]))
@@ -145,12 +147,14 @@ pub fn features_below(a: &Posed, b: &Posed, kind: Kind, hints: &Hints, out: &mut
     };
     let level = high_b + BOUNDS_SLACK * b.mesh.radius;
     let m = &a.mesh;
+    let Flood { features: out, seen, set, vertices, stack } = scratch;
     out.clear();
     if low > level {
-        return;
+        return (d, level);
     }
-    let mut seen = BitSet::with_capacity(m.vertices.len());
-    let mut stack = vec![start];
+    seen.reset(m.vertices.len());
+    stack.clear();
+    stack.push(start);
     seen.extend(&[start]);
     while let Some(i) = stack.pop() {
         for &j in row(&m.neighbours, &m.neighbour_start, i) {
@@ -161,17 +165,31 @@ pub fn features_below(a: &Posed, b: &Posed, kind: Kind, hints: &Hints, out: &mut
         }
     }
     let rows = match kind {
-        Kind::Vertices => return seen.into_sorted(out),
+        Kind::Vertices => {
+            seen.sorted_into(out);
+            return (d, level);
+        }
         Kind::Triangles => (&m.vertex_triangles, &m.vertex_triangle_start, m.triangles.len()),
         Kind::Edges => (&m.vertex_all_edges, &m.vertex_all_edge_start, m.edges.len()),
     };
-    let mut vertices = Vec::new();
-    seen.into_sorted(&mut vertices);
-    let mut set = BitSet::with_capacity(rows.2);
-    for &v in &vertices {
+    seen.sorted_into(vertices);
+    set.reset(rows.2);
+    for &v in vertices.iter() {
         set.extend(row(rows.0, rows.1, v));
     }
-    set.into_sorted(out);
+    set.sorted_into(out);
+    (d, level)
+}
+
+/// The reused buffers of `features_below`; `features` holds its answer.
+#[derive(Default)]
+pub struct Flood {
+    /// The features found, increasing.
+    pub features: Vec<u32>,
+    seen: BitSet,
+    set: BitSet,
+    vertices: Vec<u32>,
+    stack: Vec<u32>,
 }
 
 /// A set of small indices, read back in increasing order: cheaper than sorting and
@@ -185,6 +203,12 @@ impl BitSet {
     /// A set for indices below `count`, sized once.
     fn with_capacity(count: usize) -> Self {
         Self { words: vec![0; count.div_ceil(64)] }
+    }
+
+    /// Empties the set and sizes it for indices below `count`.
+    fn reset(&mut self, count: usize) {
+        self.words.clear();
+        self.words.resize(count.div_ceil(64), 0);
     }
 
     fn extend(&mut self, items: &[u32]) {
@@ -202,6 +226,10 @@ impl BitSet {
     }
 
     fn into_sorted(self, out: &mut Vec<u32>) {
+        self.sorted_into(out);
+    }
+
+    fn sorted_into(&self, out: &mut Vec<u32>) {
         out.clear();
         out.reserve(self.words.iter().map(|w| w.count_ones() as usize).sum());
         for (w, &word) in self.words.iter().enumerate() {
