@@ -125,14 +125,14 @@ pub enum Kind {
 }
 
 /// The features of many-faced `a` of one kind that have a vertex no higher along `d` than
-/// `b`'s highest point plus `b`'s bounds slack, into `out` in increasing order; `d` is the line
-/// of centres (from `b` to `a`) when `b` is many-faced too, else the normal of `b`'s face `a`
-/// lies farthest beyond (`apart_face`): any direction gives every feature that can touch. A
-/// point of `a` inside `b` is no higher than that, and so is the lowest vertex of its triangle
-/// or edge; those vertices are connected over vertex neighbours on a
-/// convex hull (a level set of a linear function), so a flood from `a`'s lowest vertex along
-/// `d` finds them, visiting only them and their neighbours. Returns `d` and the level: no
-/// point of `a` higher along `d` can be inside `b`.
+/// `b`'s highest point plus `b`'s bounds slack, into `scratch.features` in increasing order;
+/// `d` is the line of centres (from `b` to `a`) when `b` is many-faced too, else the normal of
+/// the face of `b` that `apart_face` picks: any direction gives every feature that can touch.
+/// A point of `a` inside `b` is no higher than that, and so is the lowest vertex of its
+/// triangle or edge; those vertices are connected over vertex neighbours on a convex hull (a
+/// level set of a linear function), so a flood from `a`'s lowest vertex along `d` finds them,
+/// visiting only them and their neighbours. Returns `d` and the level: no point of `a` higher
+/// along `d` can be inside `b`.
 pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scratch: &mut Flood) -> (Vector, Scalar) {
     let (d, (start, low)) = if is_many_faced(b) {
         let d = centre_line(a, b);
