@@ -2,8 +2,8 @@
 //! (docs/physics.md §1.5, erratum E4).
 
 use crate::collision::contact::{Contact, Feature};
-use crate::collision::hull::{beyond_near_face, features_near, is_many_faced};
-use crate::collision::posed::{Posed, clip_segment, depth_along};
+use crate::collision::hull::{Flood, Hints, Kind, beyond_near_face, features_below, is_many_faced};
+use crate::collision::posed::{Posed, clip_segment, depth_along_from};
 use crate::math::Scalar;
 use crate::sim::context::StepContext;
 use hecs::World;
@@ -23,7 +23,7 @@ const SHALLOW_FACE: Scalar = 2.0;
 /// - Paper: edge test; docs/physics.md §1.5 and erratum E4.
 /// - Cost: O(E_A·F_B + E_B·F_A) per candidate pair (clipping, not the paper's sort).
 pub fn edge(_world: &mut World, ctx: &mut StepContext) {
-    super::face::detect(ctx, edge_contact, Feature::Edge);
+    super::face::detect(ctx, edge_contact_from, Feature::Edge);
 }
 
 /// The first edge of `a` (sorted order) that crosses convex `b`: the midpoint of its inside
@@ -33,15 +33,19 @@ pub fn edge(_world: &mut World, ctx: &mut StepContext) {
 /// (E4).
 #[must_use]
 pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
+    edge_contact_from(a, b, [None; 2], &mut Flood::default())
+}
+
+/// `edge_contact` with walks starting at `hints`.
+fn edge_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) -> Option<Contact> {
     let eps = b.tolerance();
     let reach = b.reach();
     let (many, mut hint) = (is_many_faced(b), 0);
-    let mut near = Vec::new();
     if is_many_faced(a) {
-        features_near(a, &reach, |c| &c.edges, &mut near);
+        features_below(a, b, (Kind::Edges, &hints), flood);
     }
     let edges: Box<dyn Iterator<Item = &[u32; 2]>> = if is_many_faced(a) {
-        Box::new(near.iter().map(|&k| &a.mesh.edges[k as usize]))
+        Box::new(flood.features.iter().map(|&k| &a.mesh.edges[k as usize]))
     } else {
         Box::new(a.mesh.edges.iter())
     };
@@ -65,17 +69,19 @@ pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
             }
             _ => None,
         };
-        let face = b.closest_face_normal(point, a);
+        let face = b.closest_face_normal_from(point, a, hints);
+        let mut h = hints;
+        let mut depth = |n| depth_along_from(a, b, n, &mut h);
         let normal = match crossing {
             // The entry and exit planes meet in B's edge only if the segment passes near it. An
             // edge of A just under a face of B (a box across two others in a pyramid) crosses
             // two side faces instead, giving a sideways normal a whole body deep: take the
             // face when it is the clear minimum (§6.5).
-            Some(n) if depth_along(a, b, n) > SHALLOW_FACE * depth_along(a, b, face) + b.tolerance() => face,
+            Some(n) if depth(n) > SHALLOW_FACE * depth(face) + b.tolerance() => face,
             Some(n) => n,
             None => face,
         };
-        return Some(Contact { point, normal, depth: depth_along(a, b, normal), feature: Feature::Edge });
+        return Some(Contact { point, normal, depth: depth(normal), feature: Feature::Edge });
     }
     None
 }

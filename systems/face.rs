@@ -2,8 +2,8 @@
 //! (docs/physics.md §1.3, errata E2 and E3).
 
 use crate::collision::contact::{Contact, Feature, PairState};
-use crate::collision::hull::{features_near, is_many_faced, outside_near_face};
-use crate::collision::posed::{Posed, depth_along, is_inside};
+use crate::collision::hull::{Flood, Hints, Kind, centre_walks, features_below, is_many_faced, outside_near_face};
+use crate::collision::posed::{Posed, depth_along_from, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
 use hecs::World;
@@ -20,24 +20,57 @@ const CANCELLED_NORMAL: Scalar = 1e-6;
 /// - Paper: face test; docs/physics.md §1.3, errata E2, E3; order of §1.6.
 /// - Cost: O(F_A·F_B) per candidate pair.
 pub fn face(_world: &mut World, ctx: &mut StepContext) {
-    detect(ctx, face_contact, Feature::Face);
+    detect(ctx, face_contact_from, Feature::Face);
 }
 
 /// Runs `kernel` both ways on every candidate pair and records the first hit (docs/physics.md
 /// §1.6): the (B, A) result has its normal flipped so it still points from B to A.
-pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option<Contact>, feature: Feature) {
+/// Both ways share the walks along the line of centres (`centre_walks`).
+pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
     ctx.pose_candidates();
+    let mut walks = std::mem::take(ctx.scratch.get_mut::<CentreWalks>());
+    walks.update(ctx);
     let posed = &ctx.posed;
-    ctx.pairs.par_iter_mut().filter(|p| p.is_candidate()).for_each(|pair| {
+    let rows = ctx.pairs.par_iter_mut().zip(walks.hints.par_iter()).filter(|(p, _)| p.is_candidate());
+    rows.for_each_init(Flood::default, |flood, (pair, w)| {
         let (a, b) = (posed.get(pair.a), posed.get(pair.b));
-        if let Some(contact) = kernel(a, b).or_else(|| kernel(b, a).map(Contact::flipped)) {
+        let [ha, hb] = if w.0 == (pair.a, pair.b) { w.1 } else { centre_walks(a, b) };
+        let contact = kernel(a, b, [ha, hb], flood).or_else(|| kernel(b, a, [hb, ha], flood).map(Contact::flipped));
+        if let Some(contact) = contact {
             pair.state = PairState::Found(contact);
         }
     });
+    *ctx.scratch.get_mut::<CentreWalks>() = walks;
     // Only this test reports `feature`, so this counts its hits once even when a schedule runs
     // it twice; hits of earlier tests keep their own feature.
     let hits = ctx.pairs.iter().filter(|p| matches!(p.state, PairState::Found(c) if c.feature == feature)).count();
     ctx.stats.found[feature as usize] = hits as u64;
+}
+
+/// Each candidate pair's `centre_walks`, found by the first detection test of a step and
+/// shared by the others (the bodies do not move between them). Each entry names its pair; one
+/// that does not match is found afresh, so a schedule that changes the pairs between the tests
+/// only loses the sharing.
+#[derive(Default)]
+struct CentreWalks {
+    step: u64,
+    hints: Vec<((u32, u32), Hints)>,
+}
+
+impl CentreWalks {
+    fn update(&mut self, ctx: &StepContext) {
+        if self.step == ctx.step && self.hints.len() == ctx.pairs.len() {
+            return;
+        }
+        let posed = &ctx.posed;
+        self.step = ctx.step;
+        self.hints.clear();
+        let walk = |p: &crate::collision::contact::Pair| match p.is_candidate() {
+            true => ((p.a, p.b), centre_walks(posed.get(p.a), posed.get(p.b))),
+            false => ((u32::MAX, u32::MAX), [None; 2]),
+        };
+        ctx.pairs.par_iter().map(walk).collect_into_vec(&mut self.hints);
+    }
 }
 
 /// Triangles of `a` whose centroid is inside convex `b`, as one contact: the mean of those
@@ -46,18 +79,31 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: fn(&Posed, &Posed) -> Option
 /// The mean of a square face's two centroids is its centre, so aligned boxes get no spin.
 #[must_use]
 pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
+    face_contact_from(a, b, [None; 2], &mut Flood::default())
+}
+
+/// A detection kernel: test (A, B) one way, its walks starting at the hints (`Hints`).
+pub(crate) type Kernel = fn(&Posed, &Posed, Hints, &mut Flood) -> Option<Contact>;
+
+/// `face_contact` with walks starting at `hints`.
+fn face_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) -> Option<Contact> {
     let (mut sum_point, mut count) = (Vector::ZERO, 0_u32);
     let (mut sum_normal, mut sum_area) = (Vector::ZERO, 0.0);
     let reach = b.reach();
     let (many, mut hint) = (is_many_faced(b), 0);
-    let mut near = Vec::new();
-    if is_many_faced(a) {
-        features_near(a, &reach, |c| &c.triangles, &mut near);
-    }
-    let triangles: Box<dyn Iterator<Item = usize>> =
-        if is_many_faced(a) { Box::new(near.iter().map(|&k| k as usize)) } else { Box::new(0..a.mesh.triangles.len()) };
+    // No centroid higher than `level` along `d` is inside b.
+    let (d, level) = match is_many_faced(a) {
+        true => features_below(a, b, (Kind::Triangles, &hints), flood),
+        false => (Vector::ZERO, Scalar::INFINITY),
+    };
+    let triangles: Box<dyn Iterator<Item = usize>> = if is_many_faced(a) {
+        Box::new(flood.features.iter().map(|&k| k as usize))
+    } else {
+        Box::new(0..a.mesh.triangles.len())
+    };
     for (t, centroid) in triangles.map(|k| (&a.mesh.triangles[k], a.centroid(k))) {
-        if reach.contains(centroid)
+        if centroid.dot(d) <= level
+            && reach.contains(centroid)
             && !(many && outside_near_face(b, centroid, b.tolerance(), &mut hint))
             && is_inside(b, centroid)
         {
@@ -74,11 +120,12 @@ pub fn face_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     }
     let point = sum_point / Scalar::from(count);
     let normal = if sum_normal.length() < CANCELLED_NORMAL * sum_area {
-        b.closest_face_normal(point, a)
+        b.closest_face_normal_from(point, a, hints)
     } else {
         -sum_normal.normalize()
     };
-    Some(Contact { point, normal, depth: depth_along(a, b, normal), feature: Feature::Face })
+    let depth = depth_along_from(a, b, normal, &mut hints.clone());
+    Some(Contact { point, normal, depth, feature: Feature::Face })
 }
 
 #[cfg(test)]

@@ -2,8 +2,8 @@
 //! (docs/physics.md §1.4, erratum E5).
 
 use crate::collision::contact::{Contact, Feature};
-use crate::collision::hull::{features_near, is_many_faced, outside_near_face};
-use crate::collision::posed::{Posed, depth_along};
+use crate::collision::hull::{Flood, Hints, Kind, features_below, is_many_faced, outside_near_face};
+use crate::collision::posed::{Posed, depth_along_from, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
 use hecs::World;
@@ -15,7 +15,7 @@ use hecs::World;
 /// - Paper: vertex test; docs/physics.md §1.4 and erratum E5.
 /// - Cost: O(V_A·F_B + V_B·F_A) per candidate pair.
 pub fn vertex(_world: &mut World, ctx: &mut StepContext) {
-    super::face::detect(ctx, vertex_contact, Feature::Vertex);
+    super::face::detect(ctx, vertex_contact_from, Feature::Vertex);
 }
 
 /// All vertices of `a` inside convex `b` as one contact: their mean point, the outward normal
@@ -24,6 +24,11 @@ pub fn vertex(_world: &mut World, ctx: &mut StepContext) {
 /// spinning (E5).
 #[must_use]
 pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
+    vertex_contact_from(a, b, [None; 2], &mut Flood::default())
+}
+
+/// `vertex_contact` with walks starting at `hints`.
+fn vertex_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) -> Option<Contact> {
     let eps = b.tolerance();
     let (mut sum, mut count) = (Vector::ZERO, 0_u32);
     let mut deepest = (Scalar::INFINITY, Vector::ZERO);
@@ -31,17 +36,19 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     let (many, mut hint) = (is_many_faced(b), 0);
     // Only vertices within b's bounds can be inside it: on a many-faced body, a handful, and
     // of those most are shown outside by a face near them before all faces are tried.
-    let mut near = Vec::new();
     if is_many_faced(a) {
-        features_near(a, &reach, |c| &c.vertices, &mut near);
+        features_below(a, b, (Kind::Vertices, &hints), flood);
     }
     let candidates: Box<dyn Iterator<Item = &Vector>> = if is_many_faced(a) {
-        Box::new(near.iter().map(|&i| &a.vertices[i as usize]))
+        Box::new(flood.features.iter().map(|&i| &a.vertices[i as usize]))
     } else {
         Box::new(a.vertices.iter())
     };
     let candidates = candidates.filter(|&&v| reach.contains(v));
-    for &v in candidates.filter(|&&v| !(many && outside_near_face(b, v, eps, &mut hint))) {
+    // On a many-faced body most candidates are outside: the point-in-mesh test leaves them at
+    // the first plane they are beyond, and only the inside ones need the largest distance.
+    let outside = |v: Vector, hint: &mut u32| many && (outside_near_face(b, v, eps, hint) || !is_inside(b, v));
+    for &v in candidates.filter(|&&v| !outside(v, &mut hint)) {
         let s = b.max_plane_distance(v);
         if s <= eps {
             sum += v;
@@ -54,11 +61,11 @@ pub fn vertex_contact(a: &Posed, b: &Posed) -> Option<Contact> {
     if count == 0 {
         return None;
     }
-    let normal = b.closest_face_normal(deepest.1, a);
+    let normal = b.closest_face_normal_from(deepest.1, a, hints);
     Some(Contact {
         point: sum / Scalar::from(count),
         normal,
-        depth: depth_along(a, b, normal),
+        depth: depth_along_from(a, b, normal, &mut hints.clone()),
         feature: Feature::Vertex,
     })
 }

@@ -8,9 +8,10 @@
 //! Small meshes (a box) keep the exhaustive forms, which cost them less.
 
 use crate::collision::manifold::{Axis, PREFER, Reference};
-use crate::collision::posed::{BOUNDS_SLACK, Posed, Reach, in_box};
+use crate::collision::posed::{BOUNDS_SLACK, Posed, in_box};
 use crate::math::{Scalar, Vector};
-use crate::model::clusters::Cluster;
+
+pub use crate::collision::gjk::{distance_bound, proved_apart};
 
 /// The slab across the line of centres (see `contact_axis_near`) is widened by this share of
 /// the reach, so features a fast pair may bring into contact this step are among those tried.
@@ -75,17 +76,120 @@ pub fn lowest_vertex_seeded(p: &Posed, dir: Vector) -> (u32, Scalar) {
     lowest_vertex(p, dir, start)
 }
 
-/// The features of many-faced `a` of one kind (`members` of each cluster) in the clusters whose
-/// bounding sphere meets `reach`, into `out` in increasing order: the order, and so the sums,
-/// of a test over all of them. No other feature has a point within `reach`.
-pub fn features_near(a: &Posed, reach: &Reach, members: fn(&Cluster) -> &[u32], out: &mut Vec<u32>) {
-    let mut set = BitSet::default();
-    for (c, &centre) in a.mesh.clusters.iter().zip(&a.cluster_centres) {
-        if reach.meets_sphere(centre, c.radius) {
-            set.extend(members(c));
+/// Where walks over the two bodies of a pair (A, B) start: a vertex of each found by an
+/// earlier walk along a nearby direction, or `None` (start from the seeds). A walk ends at the
+/// lowest vertex from any start, so hints change only how long it takes.
+pub type Hints = [Option<u32>; 2];
+
+/// The unit line of centres from `b` to `a`.
+fn centre_line(a: &Posed, b: &Posed) -> Vector {
+    (a.position - b.position).normalize_or(Vector::Y)
+}
+
+/// `lowest_vertex` from `hint`, or from the seeds without one.
+#[must_use]
+pub fn walk_from(p: &Posed, dir: Vector, hint: Option<u32>) -> (u32, Scalar) {
+    hint.map_or_else(|| lowest_vertex_seeded(p, dir), |h| lowest_vertex(p, dir, h))
+}
+
+/// Hints for the tests of pair (A, B): each many-faced body's extreme vertex along the line of
+/// centres, towards the other, which each test's walks along that line (and the normals near
+/// it) then reach in a step or two.
+#[must_use]
+pub fn centre_walks(a: &Posed, b: &Posed) -> Hints {
+    let d = centre_line(a, b);
+    [is_many_faced(a).then(|| lowest_vertex_seeded(a, d).0), is_many_faced(b).then(|| lowest_vertex_seeded(b, -d).0)]
+}
+
+/// The normal of a face of small mesh `b` that many-faced `a` lies beyond, or sinks least
+/// below, with `a`'s lowest vertex along it and its value: a thin slab of `a` for a flood to
+/// visit (a ball on a floor: the floor's top, not the slanted line of centres). The face is
+/// the one whose bound on the separation (`a` reaches no more than its radius below its
+/// centre) is best, so one walk finds the vertex; any face would give the same answers.
+fn apart_face(a: &Posed, b: &Posed, hint: Option<u32>) -> (Vector, (u32, Scalar)) {
+    let bound = |pl: &crate::model::mesh::Plane| pl.normal.dot(a.position) - pl.offset;
+    let best = b.all_planes().max_by(|x, y| bound(x).total_cmp(&bound(y)));
+    let n = best.map_or(Vector::Y, |pl| pl.normal);
+    (n, walk_from(a, n, hint))
+}
+
+/// The kinds of feature the tests gather near a contact.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Vertices (the vertex test).
+    Vertices,
+    /// Triangles (the face test's centroids).
+    Triangles,
+    /// Edges, indices into the mesh's `edges` (the edge test).
+    Edges,
+}
+
+/// The features of many-faced `a` of one kind that have a vertex no higher along `d` than
+/// `b`'s highest point plus `b`'s bounds slack, into `scratch.features` in increasing order;
+/// `d` is the line of centres (from `b` to `a`) when `b` is many-faced too, else the normal of
+/// the face of `b` that `apart_face` picks: any direction gives every feature that can touch.
+/// A point of `a` inside `b` is no higher than that, and so is the lowest vertex of its
+/// triangle or edge; those vertices are connected over vertex neighbours on a convex hull (a
+/// level set of a linear function), so a flood from `a`'s lowest vertex along `d` finds them,
+/// visiting only them and their neighbours. Returns `d` and the level: no point of `a` higher
+/// along `d` can be inside `b`.
+pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scratch: &mut Flood) -> (Vector, Scalar) {
+    let (d, (start, low)) = if is_many_faced(b) {
+        let d = centre_line(a, b);
+        (d, walk_from(a, d, hints[0]))
+    } else {
+        apart_face(a, b, hints[0])
+    };
+    let high_b = if is_many_faced(b) {
+        -walk_from(b, -d, hints[1]).1
+    } else {
+        b.vertices.iter().map(|v| v.dot(d)).fold(Scalar::NEG_INFINITY, Scalar::max)
+    };
+    let level = high_b + BOUNDS_SLACK * b.mesh.radius;
+    let m = &a.mesh;
+    let Flood { features: out, seen, set, vertices, stack } = scratch;
+    out.clear();
+    if low > level {
+        return (d, level);
+    }
+    seen.reset(m.vertices.len());
+    stack.clear();
+    stack.push(start);
+    seen.extend(&[start]);
+    while let Some(i) = stack.pop() {
+        for &j in row(&m.neighbours, &m.neighbour_start, i) {
+            if !seen.contains(j) && a.vertices[j as usize].dot(d) <= level {
+                seen.extend(&[j]);
+                stack.push(j);
+            }
         }
     }
-    set.into_sorted(out);
+    let rows = match kind {
+        Kind::Vertices => {
+            seen.sorted_into(out);
+            return (d, level);
+        }
+        Kind::Triangles => (&m.vertex_triangles, &m.vertex_triangle_start, m.triangles.len()),
+        Kind::Edges => (&m.vertex_all_edges, &m.vertex_all_edge_start, m.edges.len()),
+    };
+    seen.sorted_into(vertices);
+    set.reset(rows.2);
+    for &v in vertices.iter() {
+        set.extend(row(rows.0, rows.1, v));
+    }
+    set.sorted_into(out);
+    (d, level)
+}
+
+/// The reused buffers of `features_below`; `features` holds its answer.
+#[derive(Default)]
+pub struct Flood {
+    /// The features found, increasing.
+    pub features: Vec<u32>,
+    seen: BitSet,
+    set: BitSet,
+    vertices: Vec<u32>,
+    stack: Vec<u32>,
 }
 
 /// A set of small indices, read back in increasing order: cheaper than sorting and
@@ -96,6 +200,17 @@ struct BitSet {
 }
 
 impl BitSet {
+    /// A set for indices below `count`, sized once.
+    fn with_capacity(count: usize) -> Self {
+        Self { words: vec![0; count.div_ceil(64)] }
+    }
+
+    /// Empties the set and sizes it for indices below `count`.
+    fn reset(&mut self, count: usize) {
+        self.words.clear();
+        self.words.resize(count.div_ceil(64), 0);
+    }
+
     fn extend(&mut self, items: &[u32]) {
         for &i in items {
             let (w, bit) = (i as usize / 64, i % 64);
@@ -106,8 +221,17 @@ impl BitSet {
         }
     }
 
+    fn contains(&self, i: u32) -> bool {
+        self.words.get(i as usize / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
+    }
+
     fn into_sorted(self, out: &mut Vec<u32>) {
+        self.sorted_into(out);
+    }
+
+    fn sorted_into(&self, out: &mut Vec<u32>) {
         out.clear();
+        out.reserve(self.words.iter().map(|w| w.count_ones() as usize).sum());
         for (w, &word) in self.words.iter().enumerate() {
             let mut bits = word;
             while bits != 0 {
@@ -153,7 +277,8 @@ fn near(p: &Posed, (wide, tight): (&Region, &Region), from: u32) -> Near {
         in_box(v, region.bounds) && s >= region.slab.0 && s <= region.slab.1
     };
     let mut seen = vec![false; m.vertices.len()];
-    let (mut stack, mut faces, mut edges) = (vec![from], BitSet::default(), BitSet::default());
+    let (mut stack, mut faces, mut edges) =
+        (vec![from], BitSet::with_capacity(m.planes.len()), BitSet::with_capacity(m.feature_edges.len()));
     seen[from as usize] = true;
     while let Some(i) = stack.pop() {
         faces.extend(row(&m.vertex_faces, &m.vertex_face_start, i));
@@ -245,16 +370,18 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
             consider(&mut best, -pl.normal, separation, Reference::FaceOfA(f), PREFER * margin);
         }
     }
+    // B's edges' arcs, turned once for all of A's edges.
+    let arcs_b: Vec<(Vector, Vector)> =
+        eb.iter().map(|&e| b.mesh.feature_edge_faces[e as usize].map(|f| -b.plane(f as usize).normal).into()).collect();
     for &ea in ea {
         let ([i, j], [f, g]) = (a.mesh.feature_edges[ea as usize], a.mesh.feature_edge_faces[ea as usize]);
         let (a0, a1) = (a.vertices[i as usize], a.vertices[j as usize]);
         let (fa, ga) = (a.plane(f as usize).normal, a.plane(g as usize).normal);
-        for &eb in eb {
-            let ([k, l], [h, m]) = (b.mesh.feature_edges[eb as usize], b.mesh.feature_edge_faces[eb as usize]);
-            let (hb, mb) = (b.plane(h as usize).normal, b.plane(m as usize).normal);
-            if !arcs_cross(fa, ga, -hb, -mb) {
+        for (&eb, &(hb, mb)) in eb.iter().zip(&arcs_b) {
+            if !arcs_cross(fa, ga, hb, mb) {
                 continue;
             }
+            let [k, l] = b.mesh.feature_edges[eb as usize];
             let (b0, b1) = (b.vertices[k as usize], b.vertices[l as usize]);
             let Some(n) = (a1 - a0).cross(b1 - b0).try_normalize() else { continue };
             // Outward of B at its edge, so from B to A; the gap is then between the two lines.
@@ -263,148 +390,6 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
         }
     }
     best.filter(|x| x.separation <= reach)
-}
-
-/// Most GJK iterations before giving up on a proof (it then says "not proved apart", which
-/// only costs the tests' time).
-const GJK_ITERATIONS: usize = 64;
-
-/// True when GJK proves `a` and `b` more than `margin` apart: a direction `v` whose support
-/// points bound their distance from below by more than `margin`. `false` when they are within
-/// `margin`, overlap, or no proof came within `GJK_ITERATIONS`.
-#[must_use]
-pub fn proved_apart(a: &Posed, b: &Posed, margin: Scalar) -> bool {
-    distance_bound(a, b, margin) > margin
-}
-
-/// A lower bound on the distance between `a` and `b` [m] found by GJK, stopping as soon as it
-/// exceeds `enough` (and 0 when they touch, overlap or come within `enough`).
-#[must_use]
-pub fn distance_bound(a: &Posed, b: &Posed, enough: Scalar) -> Scalar {
-    // Support of the Minkowski difference A − B along d: A's highest minus B's lowest.
-    let centre = b.position - a.position;
-    let (mut sa, mut sb) = (lowest_vertex_seeded(a, -centre).0, lowest_vertex_seeded(b, centre).0);
-    let mut support = |d: Vector| {
-        let (i, _) = lowest_vertex(a, -d, sa);
-        let (j, _) = lowest_vertex(b, d, sb);
-        (sa, sb) = (i, j);
-        a.vertices[i as usize] - b.vertices[j as usize]
-    };
-    let mut simplex: Vec<Vector> = Vec::with_capacity(4);
-    let mut v = a.position - b.position;
-    let mut bound: Scalar = 0.0;
-    if v == Vector::ZERO {
-        return bound;
-    }
-    for _ in 0..GJK_ITERATIONS {
-        let w = support(-v);
-        let length = v.length();
-        // Every point of A − B lies at least v·w/|v| from the origin along v's direction.
-        bound = bound.max(v.dot(w) / length);
-        if bound > enough {
-            return bound;
-        }
-        if simplex.iter().any(|&p| (p - w).length_squared() <= 1e-24 * length * length) {
-            return bound; // no progress: as close as GJK gets (or round-off)
-        }
-        simplex.push(w);
-        match closest_to_origin(&mut simplex) {
-            Some(closest) if closest.length() > enough => v = closest,
-            _ => return bound, // within `enough` (or overlapping)
-        }
-    }
-    bound
-}
-
-/// The point of the hull of `s` (1 to 4 points) closest to the origin; `s` keeps only the
-/// points that point is a combination of. `None` when the origin is inside (or on) the hull.
-fn closest_to_origin(s: &mut Vec<Vector>) -> Option<Vector> {
-    match s.len() {
-        1 => Some(s[0]),
-        2 => Some(closest_on_segment(s)),
-        3 => Some(closest_on_triangle(s)),
-        _ => closest_on_tetrahedron(s),
-    }
-}
-
-fn closest_on_segment(s: &mut Vec<Vector>) -> Vector {
-    let (p, q) = (s[0], s[1]);
-    let d = q - p;
-    let t = -p.dot(d) / d.length_squared().max(Scalar::MIN_POSITIVE);
-    if t <= 0.0 {
-        s.truncate(1);
-        p
-    } else if t >= 1.0 {
-        s.remove(0);
-        q
-    } else {
-        p + d * t
-    }
-}
-
-/// Closest point of triangle `s` to the origin by its Voronoi regions (Ericson, "Real-Time
-/// Collision Detection", §5.1.5).
-fn closest_on_triangle(s: &mut Vec<Vector>) -> Vector {
-    let (a, b, c) = (s[0], s[1], s[2]);
-    let (ab, ac, ap) = (b - a, c - a, -a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        *s = vec![a];
-        return a;
-    }
-    let bp = -b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        *s = vec![b];
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        *s = vec![a, b];
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = -c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        *s = vec![c];
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        *s = vec![a, c];
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        *s = vec![b, c];
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
-}
-
-/// Closest point of tetrahedron `s` to the origin: the best of the faces the origin lies
-/// outside of, or `None` when it is outside none (inside the tetrahedron).
-fn closest_on_tetrahedron(s: &mut Vec<Vector>) -> Option<Vector> {
-    let faces = [[0, 1, 2, 3], [0, 1, 3, 2], [0, 2, 3, 1], [1, 2, 3, 0]];
-    let mut best: Option<(Scalar, Vector, Vec<Vector>)> = None;
-    for [i, j, k, opposite] in faces {
-        let (p, q, r) = (s[i], s[j], s[k]);
-        let n = (q - p).cross(r - p);
-        // The origin is beyond this face when it and the opposite vertex are on either side.
-        let (origin_side, other_side) = (n.dot(-p), n.dot(s[opposite] - p));
-        if origin_side * other_side >= 0.0 {
-            continue;
-        }
-        let mut face = vec![p, q, r];
-        let point = closest_on_triangle(&mut face);
-        if best.as_ref().is_none_or(|b| point.length_squared() < b.0) {
-            best = Some((point.length_squared(), point, face));
-        }
-    }
-    let (_, point, face) = best?;
-    *s = face;
-    Some(point)
 }
 
 #[cfg(test)]
@@ -490,28 +475,5 @@ mod tests {
             }
         }
         assert!(proved > 1000, "most points outside are proved so: {proved}");
-    }
-
-    #[test]
-    fn gjk_proves_apart_exactly_the_pairs_farther_than_the_margin() {
-        let mesh = ball(1);
-        let mut rng = SplitMix64::new(5);
-        for case in 0..200 {
-            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize();
-            let a = Posed::new(
-                mesh.clone(),
-                &Pose { position: dir * (0.9 + 0.3 * rng.unit()), orientation: random_turn(&mut rng) },
-            );
-            let b = Posed::new(mesh.clone(), &Pose { position: Vector::ZERO, orientation: random_turn(&mut rng) });
-            // The true gap of two convex hulls is the largest separation over the SAT axes.
-            let gap = contact_axis_all(&a, &b, (0.0, Scalar::INFINITY)).map_or(Scalar::INFINITY, |x| x.separation);
-            let margin = 0.01;
-            if gap > margin + 1e-9 {
-                assert!(proved_apart(&a, &b, margin), "case {case}: gap {gap} not proved");
-            }
-            if gap <= margin {
-                assert!(!proved_apart(&a, &b, margin), "case {case}: gap {gap} 'proved' beyond {margin}");
-            }
-        }
     }
 }

@@ -2,7 +2,9 @@
 //! candidate pairs, and the clipped manifolds that resting contact holds.
 
 pub mod contact;
+pub mod gjk;
 pub mod hull;
 pub mod manifold;
+pub mod planes;
 pub mod posed;
 pub mod toi;

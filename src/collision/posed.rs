@@ -38,14 +38,6 @@ impl Reach {
         in_box(p, self.bounds) && (p - self.centre).length_squared() <= self.radius * self.radius
     }
 
-    /// True when a sphere may meet the body.
-    #[must_use]
-    pub fn meets_sphere(&self, centre: Vector, radius: Scalar) -> bool {
-        let nearest = centre.clamp(self.bounds.0, self.bounds.1);
-        (nearest - centre).length_squared() <= radius * radius
-            && (centre - self.centre).length() <= radius + self.radius
-    }
-
     /// True when segment `p`–`q` may meet the body.
     #[must_use]
     pub fn meets_segment(&self, p: Vector, q: Vector) -> bool {
@@ -92,8 +84,6 @@ pub struct Posed {
     pub centroids: Vec<Vector>,
     /// World axis-aligned bounds of the vertices, (min, max) [m].
     pub bounds: (Vector, Vector),
-    /// World centres of the mesh's feature clusters (a many-faced mesh's), in order [m].
-    pub cluster_centres: Vec<Vector>,
 }
 
 impl Posed {
@@ -110,7 +100,6 @@ impl Posed {
             edge_directions: Vec::new(),
             centroids: Vec::new(),
             bounds: (Vector::ZERO, Vector::ZERO),
-            cluster_centres: Vec::new(),
         };
         posed.update(pose);
         posed
@@ -123,9 +112,14 @@ impl Posed {
         (self.position, self.orientation, self.rotation) = (x, pose.orientation, r);
         let many = crate::collision::hull::is_many_faced(self);
         self.vertices.clear();
-        self.vertices.extend(self.mesh.vertices.iter().map(|&v| x + r * v));
-        self.bounds =
-            self.vertices.iter().fold((Vector::INFINITY, Vector::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        // The bounds grow in the same pass, in the same order as over the posed list.
+        let (mut lo, mut hi) = (Vector::INFINITY, Vector::NEG_INFINITY);
+        self.vertices.extend(self.mesh.vertices.iter().map(|&v| {
+            let w = x + r * v;
+            (lo, hi) = (lo.min(w), hi.max(w));
+            w
+        }));
+        self.bounds = (lo, hi);
         let mut planes = self.planes.take().unwrap_or_default();
         planes.clear();
         self.edge_directions.clear();
@@ -135,8 +129,6 @@ impl Posed {
             self.planes.set(planes).expect("taken just above");
             self.edge_directions.extend(self.mesh.edge_directions.iter().map(|&d| r * d));
         }
-        self.cluster_centres.clear();
-        self.cluster_centres.extend(self.mesh.clusters.iter().map(|c| x + r * c.centre));
         self.centroids.clear();
         if many {
             return;
@@ -204,17 +196,31 @@ impl Posed {
     /// below its bottom face, yet the side is the contact normal.
     #[must_use]
     pub fn closest_face_normal(&self, p: Vector, other: &Self) -> Vector {
+        self.closest_face_normal_from(p, other, [None; 2])
+    }
+
+    /// `closest_face_normal` with walks over `other` and this body starting at `hints`.
+    #[must_use]
+    pub fn closest_face_normal_from(&self, p: Vector, other: &Self, hints: [Option<u32>; 2]) -> Vector {
         let best = self.max_plane_distance(p);
         let tie = FACE_TIE_TOLERANCE * self.mesh.radius;
         let toward = other.position - self.position;
         let mut chosen = (Scalar::INFINITY, Scalar::NEG_INFINITY, Vector::ZERO);
-        let (q, planes, turn) = self.planes_for(p);
-        for pl in planes.iter().filter(|pl| pl.normal.dot(q) - pl.offset >= best - tie) {
-            let normal = turn.map_or(pl.normal, |r| r * pl.normal);
-            let (depth, facing) = (depth_along(other, self, normal), normal.dot(toward));
+        // The candidates' normals are close: each walk starts where the last one ended.
+        let mut hints = hints;
+        let mut consider = |normal: Vector| {
+            let (depth, facing) = (depth_along_from(other, self, normal, &mut hints), normal.dot(toward));
             if depth < chosen.0 || (depth == chosen.0 && facing > chosen.1) {
                 chosen = (depth, facing, normal);
             }
+        };
+        let (q, planes, turn) = self.planes_for(p);
+        if let Some(r) = turn {
+            let mut near = Vec::new();
+            crate::collision::planes::planes_above(&self.mesh, q, best - tie, &mut near);
+            near.iter().for_each(|&f| consider(r * self.mesh.planes[f as usize].normal));
+        } else {
+            planes.iter().filter(|pl| pl.normal.dot(q) - pl.offset >= best - tie).for_each(|pl| consider(pl.normal));
         }
         chosen.2
     }
@@ -223,7 +229,10 @@ impl Posed {
     /// tolerance, and minus it is the depth below the closest face (docs/physics.md §1.1).
     #[must_use]
     pub fn max_plane_distance(&self, p: Vector) -> Scalar {
-        let (q, planes, _) = self.planes_for(p);
+        let (q, planes, turn) = self.planes_for(p);
+        if turn.is_some() {
+            return crate::collision::planes::max_distance(&self.mesh, q);
+        }
         planes.iter().map(|pl| pl.normal.dot(q) - pl.offset).fold(Scalar::NEG_INFINITY, Scalar::max)
     }
 
@@ -274,7 +283,10 @@ fn turned(p: Plane, r: crate::math::Mat3, x: Vector) -> Plane {
 #[must_use]
 pub fn is_inside(b: &Posed, p: Vector) -> bool {
     let eps = b.tolerance();
-    let (q, planes, _) = b.planes_for(p);
+    let (q, planes, turn) = b.planes_for(p);
+    if turn.is_some() {
+        return crate::collision::planes::inside(&b.mesh, q, eps);
+    }
     planes.iter().all(|pl| pl.normal.dot(q) - pl.offset <= eps)
 }
 
@@ -303,47 +315,71 @@ pub struct Clip {
 /// ```
 #[must_use]
 pub fn clip_segment(b: &Posed, v0: Vector, v1: Vector, eps: Scalar) -> Option<Clip> {
-    let mut clip = Clip { t_in: 0.0, t_out: 1.0, plane_in: None, plane_out: None };
     let (v0, planes, turn) = b.planes_for(v0);
-    let v1 = if turn.is_some() { b.rotation.transpose() * (v1 - b.position) } else { v1 };
+    if turn.is_some() {
+        let v1 = b.rotation.transpose() * (v1 - b.position);
+        return crate::collision::planes::clip(&b.mesh, v0, v1, eps);
+    }
+    let mut clip = Clip { t_in: 0.0, t_out: 1.0, plane_in: None, plane_out: None };
     for (f, pl) in planes.iter().enumerate() {
         let d0 = pl.normal.dot(v0) - pl.offset - eps;
         let d1 = pl.normal.dot(v1) - pl.offset - eps;
-        if d0 > 0.0 && d1 > 0.0 {
-            return None;
-        }
-        if d0 > 0.0 && d1 <= 0.0 {
-            let t = d0 / (d0 - d1);
-            if t > clip.t_in {
-                clip.t_in = t;
-                clip.plane_in = Some(f);
-            }
-        } else if d0 <= 0.0 && d1 > 0.0 {
-            let t = d0 / (d0 - d1);
-            if t < clip.t_out {
-                clip.t_out = t;
-                clip.plane_out = Some(f);
-            }
-        }
-        if clip.t_in >= clip.t_out {
+        if !clip.cut(f, d0, d1) {
             return None;
         }
     }
     Some(clip)
 }
 
+impl Clip {
+    /// Cuts the clip by plane `f`, where the segment's ends are `d0` and `d1` outside it;
+    /// `false` when nothing is left. Of planes cutting at the same parameter the lowest index
+    /// is kept, whatever order they come in.
+    pub(crate) fn cut(&mut self, f: usize, d0: Scalar, d1: Scalar) -> bool {
+        if d0 > 0.0 && d1 > 0.0 {
+            return false;
+        }
+        let lower = |p: Option<usize>| p.is_some_and(|p| f < p);
+        if d0 > 0.0 && d1 <= 0.0 {
+            let t = d0 / (d0 - d1);
+            if t > self.t_in || (t == self.t_in && lower(self.plane_in)) {
+                (self.t_in, self.plane_in) = (t, Some(f));
+            }
+        } else if d0 <= 0.0 && d1 > 0.0 {
+            let t = d0 / (d0 - d1);
+            if t < self.t_out || (t == self.t_out && lower(self.plane_out)) {
+                (self.t_out, self.plane_out) = (t, Some(f));
+            }
+        }
+        self.t_in < self.t_out
+    }
+}
+
 /// Overlap of the two bodies' projections on `n` (from B to A), docs/physics.md §2.6:
 /// `max_b b·n − min_a a·n`, clamped at 0. Moving A by this along `n` separates them.
 #[must_use]
 pub fn depth_along(a: &Posed, b: &Posed, n: Vector) -> Scalar {
-    use crate::collision::hull::{is_many_faced, lowest_vertex_seeded};
+    depth_along_from(a, b, n, &mut [None; 2])
+}
+
+/// `depth_along`, a many-faced body's walk starting where `hints` says (the end of an earlier
+/// walk along a nearby direction, so only a few steps are left) and leaving its end there.
+/// The walk ends at the lowest vertex from any start, so the depth is the same.
+pub(crate) fn depth_along_from(a: &Posed, b: &Posed, n: Vector, hints: &mut [Option<u32>; 2]) -> Scalar {
+    use crate::collision::hull::is_many_faced;
+    let walk = |p: &Posed, dir: Vector, hint: &mut Option<u32>| {
+        let (end, value) = crate::collision::hull::walk_from(p, dir, *hint);
+        *hint = Some(end);
+        value
+    };
+    let [hint_a, hint_b] = hints;
     let max_b = if is_many_faced(b) {
-        -lowest_vertex_seeded(b, -n).1
+        -walk(b, -n, hint_b)
     } else {
         b.vertices.iter().map(|v| v.dot(n)).fold(Scalar::NEG_INFINITY, Scalar::max)
     };
     let min_a = if is_many_faced(a) {
-        lowest_vertex_seeded(a, n).1
+        walk(a, n, hint_a)
     } else {
         a.vertices.iter().map(|v| v.dot(n)).fold(Scalar::INFINITY, Scalar::min)
     };

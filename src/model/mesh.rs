@@ -84,9 +84,17 @@ pub struct ConvexMesh {
     pub vertex_edges: Vec<u32>,
     /// Where each vertex's feature edges start in `vertex_edges`, plus one entry for the end.
     pub vertex_edge_start: Vec<u32>,
-    /// The features grouped by direction, each group with a bounding sphere (empty unless the
-    /// mesh is many-faced: more than `MANY_EDGES` feature edges).
-    pub clusters: Vec<crate::model::clusters::Cluster>,
+    /// The triangles at vertex i, laid out as `vertex_faces`.
+    pub vertex_triangles: Vec<u32>,
+    /// Where each vertex's triangles start in `vertex_triangles`, plus one entry for the end.
+    pub vertex_triangle_start: Vec<u32>,
+    /// The edges (indices into `edges`) at vertex i, laid out as `vertex_faces`.
+    pub vertex_all_edges: Vec<u32>,
+    /// Where each vertex's edges start in `vertex_all_edges`, plus one entry for the end.
+    pub vertex_all_edge_start: Vec<u32>,
+    /// The face planes grouped by normal, each group with a bound (empty unless many-faced):
+    /// plane scans skip the groups that cannot matter.
+    pub plane_groups: Vec<crate::model::clusters::PlaneGroup>,
     /// The vertices farthest along each of 26 directions (the faces, edges and corners of a
     /// cube), each once: a walk for the vertex lowest along any direction starts at the best
     /// of them and has only a few steps left.
@@ -140,15 +148,16 @@ impl ConvexMesh {
             vertices.len(),
             feature_edges.iter().enumerate().flat_map(|(e, &[i, j])| [(i, e as u32), (j, e as u32)]),
         );
+        let (vertex_triangles, vertex_triangle_start) =
+            grouped(vertices.len(), triangles.iter().enumerate().flat_map(|(k, t)| t.map(|v| (v, k as u32))));
+        let (vertex_all_edges, vertex_all_edge_start) =
+            grouped(vertices.len(), edges.iter().enumerate().flat_map(|(e, &[i, j])| [(i, e as u32), (j, e as u32)]));
         let seeds = seeds(&vertices);
-        let clusters = if many_faced(&feature_edges) {
-            crate::model::clusters::clusters(&vertices, &triangles, &edges)
-        } else {
-            Vec::new()
-        };
+        let plane_groups =
+            if many_faced(&feature_edges) { crate::model::clusters::plane_groups(&planes) } else { Vec::new() };
         let mesh = Self {
             seeds,
-            clusters,
+            plane_groups,
             vertices,
             triangles,
             edges,
@@ -165,6 +174,10 @@ impl ConvexMesh {
             vertex_face_start,
             vertex_edges,
             vertex_edge_start,
+            vertex_triangles,
+            vertex_triangle_start,
+            vertex_all_edges,
+            vertex_all_edge_start,
             radius,
             thickness,
             volume: props.volume,

@@ -1,0 +1,214 @@
+//! GJK (Gilbert, Johnson, Keerthi 1988) on many-faced hulls: a lower bound on the distance
+//! between two bodies from support points found by walking vertex neighbours, which proves a
+//! pair apart without testing every face against every vertex.
+
+use crate::collision::hull::{lowest_vertex, lowest_vertex_seeded};
+use crate::collision::posed::Posed;
+use crate::math::{Scalar, Vector};
+
+/// Up to four points of the Minkowski difference, kept in place (no allocation a step).
+#[derive(Clone, Copy, Debug, Default)]
+struct Simplex {
+    p: [Vector; 4],
+    len: usize,
+}
+
+impl Simplex {
+    fn of(points: &[Vector]) -> Self {
+        let mut p = [Vector::ZERO; 4];
+        p[..points.len()].copy_from_slice(points);
+        Self { p, len: points.len() }
+    }
+
+    fn points(&self) -> &[Vector] {
+        &self.p[..self.len]
+    }
+
+    fn push(&mut self, w: Vector) {
+        self.p[self.len] = w;
+        self.len += 1;
+    }
+}
+
+/// Most GJK iterations before giving up on a proof (it then says "not proved apart", which
+/// only costs the tests' time).
+const GJK_ITERATIONS: usize = 64;
+
+/// True when GJK proves `a` and `b` more than `margin` apart: a direction `v` whose support
+/// points bound their distance from below by more than `margin`. `false` when they are within
+/// `margin`, overlap, or no proof came within `GJK_ITERATIONS`.
+#[must_use]
+pub fn proved_apart(a: &Posed, b: &Posed, margin: Scalar) -> bool {
+    distance_bound(a, b, margin) > margin
+}
+
+/// A lower bound on the distance between `a` and `b` [m] found by GJK, stopping as soon as it
+/// exceeds `enough` (and 0 when they touch, overlap or come within `enough`).
+#[must_use]
+pub fn distance_bound(a: &Posed, b: &Posed, enough: Scalar) -> Scalar {
+    // Support of the Minkowski difference A − B along d: A's highest minus B's lowest.
+    let centre = b.position - a.position;
+    let (mut sa, mut sb) = (lowest_vertex_seeded(a, -centre).0, lowest_vertex_seeded(b, centre).0);
+    let mut support = |d: Vector| {
+        let (i, _) = lowest_vertex(a, -d, sa);
+        let (j, _) = lowest_vertex(b, d, sb);
+        (sa, sb) = (i, j);
+        a.vertices[i as usize] - b.vertices[j as usize]
+    };
+    let mut simplex = Simplex::default();
+    let mut v = a.position - b.position;
+    let mut bound: Scalar = 0.0;
+    if v == Vector::ZERO {
+        return bound;
+    }
+    for _ in 0..GJK_ITERATIONS {
+        let w = support(-v);
+        let length = v.length();
+        // Every point of A − B lies at least v·w/|v| from the origin along v's direction.
+        bound = bound.max(v.dot(w) / length);
+        if bound > enough {
+            return bound;
+        }
+        if simplex.points().iter().any(|&p| (p - w).length_squared() <= 1e-24 * length * length) {
+            return bound; // no progress: as close as GJK gets (or round-off)
+        }
+        simplex.push(w);
+        match closest_to_origin(&mut simplex) {
+            Some(closest) if closest.length() > enough => v = closest,
+            _ => return bound, // within `enough` (or overlapping)
+        }
+    }
+    bound
+}
+
+/// The point of the hull of `s` (1 to 4 points) closest to the origin; `s` keeps only the
+/// points that point is a combination of. `None` when the origin is inside (or on) the hull.
+fn closest_to_origin(s: &mut Simplex) -> Option<Vector> {
+    match s.len {
+        1 => Some(s.p[0]),
+        2 => Some(closest_on_segment(s)),
+        3 => Some(closest_on_triangle(s)),
+        _ => closest_on_tetrahedron(s),
+    }
+}
+
+fn closest_on_segment(s: &mut Simplex) -> Vector {
+    let [p, q, ..] = s.p;
+    let d = q - p;
+    let t = -p.dot(d) / d.length_squared().max(Scalar::MIN_POSITIVE);
+    if t <= 0.0 {
+        *s = Simplex::of(&[p]);
+        p
+    } else if t >= 1.0 {
+        *s = Simplex::of(&[q]);
+        q
+    } else {
+        p + d * t
+    }
+}
+
+/// Closest point of triangle `s` to the origin by its Voronoi regions (Ericson, "Real-Time
+/// Collision Detection", §5.1.5).
+fn closest_on_triangle(s: &mut Simplex) -> Vector {
+    let [a, b, c, _] = s.p;
+    let (ab, ac, ap) = (b - a, c - a, -a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        *s = Simplex::of(&[a]);
+        return a;
+    }
+    let bp = -b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        *s = Simplex::of(&[b]);
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        *s = Simplex::of(&[a, b]);
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = -c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        *s = Simplex::of(&[c]);
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        *s = Simplex::of(&[a, c]);
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        *s = Simplex::of(&[b, c]);
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+/// Closest point of tetrahedron `s` to the origin: the best of the faces the origin lies
+/// outside of, or `None` when it is outside none (inside the tetrahedron).
+fn closest_on_tetrahedron(s: &mut Simplex) -> Option<Vector> {
+    let faces = [[0, 1, 2, 3], [0, 1, 3, 2], [0, 2, 3, 1], [1, 2, 3, 0]];
+    let mut best: Option<(Scalar, Vector, Simplex)> = None;
+    for [i, j, k, opposite] in faces {
+        let (p, q, r) = (s.p[i], s.p[j], s.p[k]);
+        let n = (q - p).cross(r - p);
+        // The origin is beyond this face when it and the opposite vertex are on either side.
+        let (origin_side, other_side) = (n.dot(-p), n.dot(s.p[opposite] - p));
+        if origin_side * other_side >= 0.0 {
+            continue;
+        }
+        let mut face = Simplex::of(&[p, q, r]);
+        let point = closest_on_triangle(&mut face);
+        if best.as_ref().is_none_or(|b| point.length_squared() < b.0) {
+            best = Some((point.length_squared(), point, face));
+        }
+    }
+    let (_, point, face) = best?;
+    *s = face;
+    Some(point)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::manifold::contact_axis_all;
+    use crate::math::Quat;
+    use crate::model::components::Pose;
+    use crate::model::mesh::ConvexMesh;
+    use crate::model::shapes::icosphere_raw;
+    use crate::rng::SplitMix64;
+    use std::sync::Arc;
+
+    fn random_turn(rng: &mut SplitMix64) -> Quat {
+        let axis = Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize_or(Vector::Y);
+        Quat::from_axis_angle(axis, 6.3 * rng.unit())
+    }
+
+    #[test]
+    fn gjk_proves_apart_exactly_the_pairs_farther_than_the_margin() {
+        let (v, t) = icosphere_raw(0.5, 1);
+        let mesh = Arc::new(ConvexMesh::new(v, t).expect("an icosphere is valid").0);
+        let mut rng = SplitMix64::new(5);
+        for case in 0..200 {
+            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize();
+            let a = Posed::new(
+                mesh.clone(),
+                &Pose { position: dir * (0.9 + 0.3 * rng.unit()), orientation: random_turn(&mut rng) },
+            );
+            let b = Posed::new(mesh.clone(), &Pose { position: Vector::ZERO, orientation: random_turn(&mut rng) });
+            // The true gap of two convex hulls is the largest separation over the SAT axes.
+            let gap = contact_axis_all(&a, &b, (0.0, Scalar::INFINITY)).map_or(Scalar::INFINITY, |x| x.separation);
+            let margin = 0.01;
+            if gap > margin + 1e-9 {
+                assert!(proved_apart(&a, &b, margin), "case {case}: gap {gap} not proved");
+            }
+            if gap <= margin {
+                assert!(!proved_apart(&a, &b, margin), "case {case}: gap {gap} 'proved' beyond {margin}");
+            }
+        }
+    }
+}
