@@ -217,6 +217,17 @@ pub(crate) fn equality_count(kind: &JointKind) -> usize {
     }
 }
 
+/// Whether a joint of `kind` has rows solved one joint at a time (limits, motors, a cone, a
+/// distance's range or spring), beside its equality rows.
+fn one_by_one(kind: &JointKind) -> bool {
+    match kind {
+        JointKind::Ball { cone } => cone.is_some(),
+        JointKind::Hinge { limits, motor } | JointKind::Slider { limits, motor } => limits.is_some() || motor.is_some(),
+        JointKind::Fixed => false,
+        JointKind::Distance { .. } => true,
+    }
+}
+
 /// A joint's equality rows at geometry `g`: each row, its position error and where its impulse
 /// is kept. Points and locked rotations on world axes where all three are held, across the
 /// axis where two are.
@@ -272,8 +283,9 @@ pub(crate) fn joint_pass<B: BodyStore + ?Sized>(bodies: &mut B, joints: &mut Joi
         JointPass::Warm | JointPass::Relax => Soft::RIGID,
     };
     let Joints { joints: list, impulses, ends, geometry, system, .. } = joints;
-    for (((joint, imp), &ends), g) in list.iter().zip(impulses.iter_mut()).zip(ends.iter()).zip(geometry.iter()) {
-        let mut pair = Pair { bodies: &mut *bodies, ends };
+    for (k, joint) in list.iter().enumerate().filter(|(_, j)| one_by_one(&j.kind)) {
+        let (imp, g) = (&mut impulses[k], &geometry[k]);
+        let mut pair = Pair { bodies: &mut *bodies, ends: ends[k] };
         match pass {
             JointPass::Warm => warm(&mut pair, joint, g, imp),
             JointPass::Solve | JointPass::Relax => solve(&mut pair, joint, g, imp, soft, pass, h),
