@@ -10,7 +10,7 @@
 //! (points, locked rotations, rods) are solved together, exactly (`JointSystem`); the others
 //! one joint after another, before them.
 
-use super::joint_system::{MAX_ROWS, ScaledRow};
+use super::joint_system::ScaledRow;
 use super::joints::{Frame, Geometry, Joint, JointImpulses, JointKind, Joints};
 use super::{BodyStore, SolverBody};
 use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
@@ -228,16 +228,10 @@ fn one_by_one(kind: &JointKind) -> bool {
     }
 }
 
-/// A joint's equality rows at geometry `g`: each row, its position error and where its impulse
-/// is kept. Points and locked rotations on world axes where all three are held, across the
-/// axis where two are.
-fn equality_rows(joint: &Joint, g: &Geometry) -> [(Row, Scalar, Carry); MAX_ROWS] {
-    let mut out = [(Row::angular(Vector::ZERO), 0.0, Carry::Axial); MAX_ROWS];
-    let mut n = 0;
-    let mut push = |row: Row, c: Scalar, carry: Carry| {
-        out[n] = (row, c, carry);
-        n += 1;
-    };
+/// A joint's equality rows at geometry `g`, handed to `push` in order: each row, its position
+/// error and where its impulse is kept. Points and locked rotations on world axes where all
+/// three are held, across the axis where two are.
+fn equality_rows(joint: &Joint, g: &Geometry, mut push: impl FnMut(Row, Scalar, Carry)) {
     let axes = [Vector::X, Vector::Y, Vector::Z];
     if matches!(joint.kind, JointKind::Ball { .. } | JointKind::Hinge { .. } | JointKind::Fixed) {
         for (k, n) in axes.into_iter().enumerate() {
@@ -269,7 +263,6 @@ fn equality_rows(joint: &Joint, g: &Geometry) -> [(Row, Scalar, Carry); MAX_ROWS
             push(Row::angular(u), twist[k], Carry::Angular(u));
         }
     }
-    out
 }
 
 /// Runs `pass` over every joint with substeps of `h` [s]: the one-sided and driven rows joint
@@ -311,17 +304,19 @@ fn refresh<B: BodyStore + ?Sized>(bodies: &B, joints: &mut Joints) {
     }));
     for &(k, first, len) in spans.iter() {
         let (joint, imp, e) = (&list[k], &impulses[k], &ends[k]);
-        for (i, (row, c, how)) in equality_rows(joint, &geometry[k]).into_iter().take(len).enumerate() {
-            let scaled = ScaledRow { lin: row.lin, g_a: e[0].scale * row.ang_a, g_b: e[1].scale * row.ang_b };
-            system.rows[first + i] = scaled;
-            system.error[first + i] = c;
-            system.acc[first + i] = match how {
+        let mut i = first;
+        equality_rows(joint, &geometry[k], |row, c, how| {
+            system.rows[i] = ScaledRow { lin: row.lin, g_a: e[0].scale * row.ang_a, g_b: e[1].scale * row.ang_b };
+            system.error[i] = c;
+            system.acc[i] = match how {
                 Carry::Point(n) => imp.point.dot(n),
                 Carry::Angular(u) => imp.angular.dot(u),
                 Carry::Axial => imp.axial,
             };
-            carry[first + i] = how;
-        }
+            carry[i] = how;
+            i += 1;
+        });
+        debug_assert_eq!(i, first + len, "equality_count and equality_rows disagree");
     }
     system.factorise();
     joints.stale = false;

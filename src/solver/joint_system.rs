@@ -189,8 +189,11 @@ impl JointSystem {
         }
         for (pos, &k) in self.shape.order.iter().enumerate().rev() {
             let nk = &self.nodes[k as usize];
+            // Element by element: a slice copy of three to six numbers is a call to memcpy.
             let mut x = [0.0; MAX_ROWS];
-            x[..nk.len].copy_from_slice(&y[nk.first..nk.first + nk.len]);
+            for (xi, yi) in x.iter_mut().zip(&y[nk.first..nk.first + nk.len]) {
+                *xi = *yi;
+            }
             ldl_solve(&self.diag[k as usize], nk.len, &mut x);
             let [(lo, hi), _] = self.shape.ranges[pos];
             for &(n, b) in &self.shape.later[lo as usize..hi as usize] {
@@ -200,7 +203,9 @@ impl JointSystem {
                     *xi -= (0..nn.len).map(|j| l[i * MAX_ROWS + j] * y[nn.first + j]).sum::<Scalar>();
                 }
             }
-            y[nk.first..nk.first + nk.len].copy_from_slice(&x[..nk.len]);
+            for (yi, xi) in y[nk.first..nk.first + nk.len].iter_mut().zip(x) {
+                *yi = xi;
+            }
         }
     }
 
