@@ -256,6 +256,27 @@ fn hinge_limits_hold_against_a_motor_and_gravity() {
 }
 
 #[test]
+fn a_door_swung_into_its_limit_stops_there() {
+    // scenes/door.ron: spinning open at 1.5 rad/s into its 90° limit, no restitution anywhere.
+    let mut sim = sim_of("door.ron", |_| {});
+    let turned = |sim: &Sim| {
+        let c = actor(sim, "door").pose.position;
+        (-c.z).atan2(c.x).to_degrees()
+    };
+    let (mut slowest, mut widest): (f64, f64) = (0.0, 0.0);
+    for _ in 0..600 {
+        sim.step().expect("finite");
+        slowest = slowest.min(actor(&sim, "door").velocity.angular.y);
+        widest = widest.max(turned(&sim));
+    }
+    println!("door: fastest back swing {slowest} rad/s, widest {widest}°, at {}° after 5 s", turned(&sim));
+    assert!(slowest > -0.015, "rebounds at {slowest} rad/s, over 1 % of the 1.5 rad/s hit");
+    assert!((widest - 90.0).abs() < 0.05, "reaches the limit and stops there: widest {widest}°");
+    // What rebound there is, a few thousandths of a rad/s, carries it back by under a degree.
+    assert!(turned(&sim) > 89.0, "still at the limit: {}°", turned(&sim));
+}
+
+#[test]
 fn a_slider_on_a_frictionless_incline_accelerates_at_g_sin_theta() {
     // A block on a slider along a 30° slope, joined to the world.
     let theta: f64 = 30f64.to_radians();

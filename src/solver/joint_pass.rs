@@ -266,7 +266,7 @@ fn equality_rows(joint: &Joint, g: &Geometry, mut push: impl FnMut(Row, Scalar, 
 }
 
 /// Runs `pass` over every joint with substeps of `h` [s]: the one-sided and driven rows joint
-/// by joint in scene order, then the equality rows of all at once.
+/// by joint in scene order, then the equality rows of all at once; twice when there are both.
 pub(crate) fn joint_pass<B: BodyStore + ?Sized>(bodies: &mut B, joints: &mut Joints, pass: JointPass, h: Scalar) {
     if joints.stale {
         refresh(&*bodies, joints);
@@ -275,19 +275,29 @@ pub(crate) fn joint_pass<B: BodyStore + ?Sized>(bodies: &mut B, joints: &mut Joi
         JointPass::Solve => Soft::new(JOINT_HERTZ_PER_SUBSTEP_RATE / h, JOINT_DAMPING_RATIO, h),
         JointPass::Warm | JointPass::Relax => Soft::RIGID,
     };
-    let Joints { joints: list, impulses, ends, geometry, system, .. } = joints;
-    for (k, joint) in list.iter().enumerate().filter(|(_, j)| one_by_one(&j.kind)) {
-        let (imp, g) = (&mut impulses[k], &geometry[k]);
-        let mut pair = Pair { bodies: &mut *bodies, ends: ends[k] };
-        match pass {
-            JointPass::Warm => warm(&mut pair, joint, g, imp),
-            JointPass::Solve | JointPass::Relax => solve(&mut pair, joint, g, imp, soft, pass, h),
+    let Joints { joints: list, impulses, ends, geometry, system, mixed, .. } = joints;
+    let mut one_by_one_rows = |bodies: &mut B| {
+        for (k, joint) in list.iter().enumerate().filter(|(_, j)| one_by_one(&j.kind)) {
+            let (imp, g) = (&mut impulses[k], &geometry[k]);
+            let mut pair = Pair { bodies: &mut *bodies, ends: ends[k] };
+            match pass {
+                JointPass::Warm => warm(&mut pair, joint, g, imp),
+                JointPass::Solve | JointPass::Relax => solve(&mut pair, joint, g, imp, soft, pass, h),
+            }
         }
-    }
+    };
+    one_by_one_rows(bodies);
     match pass {
         JointPass::Warm => system.warm(bodies),
         JointPass::Solve | JointPass::Relax => {
             system.pass(bodies, [soft.bias_rate, soft.mass_scale, soft.impulse_scale]);
+            // Limits and the equality rows push against each other (a door stopped by its
+            // limit needs the hinge's point to stop its centre): a second round lets them
+            // agree, or the hit comes back as a rebound.
+            if *mixed {
+                one_by_one_rows(bodies);
+                system.pass(bodies, [soft.bias_rate, soft.mass_scale, soft.impulse_scale]);
+            }
         }
     }
 }
@@ -452,5 +462,6 @@ pub(crate) fn prepare(
     joints.spans.clear();
     joints.spans.extend(joints.system.spans().map(|(k, r)| (k, r.start, r.len())));
     joints.carry.resize(joints.system.rows.len(), Carry::Axial);
+    joints.mixed = joints.joints.iter().any(|j| one_by_one(&j.kind));
     (joints.stale, joints.rows_valid) = (true, false);
 }

@@ -246,6 +246,8 @@ pub struct Joints {
     /// The bodies moved since the last refresh; the rows hold impulses not yet stored.
     pub(crate) stale: bool,
     pub(crate) rows_valid: bool,
+    /// Some joint has rows solved one joint at a time (a limit, motor, cone or distance).
+    pub(crate) mixed: bool,
 }
 
 impl Joints {
