@@ -119,4 +119,6 @@ pub const PAGE_TEST_IDS: &[&str] = &[
     "actor-velocity",
     "actor-apply",
     "save",
+    "show-joints",
+    "joint-count",
 ];

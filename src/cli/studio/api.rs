@@ -112,7 +112,8 @@ fn offered_systems(s: &Studio) -> Vec<String> {
     names
 }
 
-/// The state document; `with_actors` false leaves the actor list empty (the page's poll).
+/// The state document; `with_actors` false leaves the actor and joint lists empty (the page's
+/// poll).
 fn state(s: &Studio, with_actors: bool) -> Value {
     let sim = &s.sim;
     let all = if with_actors { sim.actors() } else { Vec::new() };
@@ -155,7 +156,7 @@ fn state(s: &Studio, with_actors: bool) -> Value {
         "version": s.version,
         "actor_count": sim.len(),
         "actors": actors,
-        "joints": [],
+        "joints": if with_actors { super::joints::state(sim) } else { Vec::new() },
         "schedule": sim.schedule.names(),
         "systems": offered_systems(s),
         "systems_ms": systems_ms,
@@ -219,7 +220,7 @@ fn meshes(s: &Studio) -> Value {
             })
         })
         .collect();
-    json!({"version": s.version, "meshes": meshes, "actors": actors})
+    json!({"version": s.version, "meshes": meshes, "actors": actors, "joints": super::joints::frames(sim)})
 }
 
 fn parse_json(body: &str) -> Result<Value, Reply> {

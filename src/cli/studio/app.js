@@ -8,7 +8,8 @@
 //                                 click:FX/FY (a click at fractions of the viewport),
 //                                 edit:FIELD=VALUE (mass, restitution, friction or velocity
 //                                 as "x y z"; posted at once), save (fetch /api/scene into
-//                                 body[data-saved]), scene:RON-TEXT (last: it may hold commas)
+//                                 body[data-saved]), joints:on|off (draw the joints or not),
+//                                 scene:RON-TEXT (last: it may hold commas)
 
 import * as THREE from './three.module.min.js';
 import { OrbitControls } from './OrbitControls.js';
@@ -64,6 +65,19 @@ marker.rotation.x = -Math.PI / 2;
 marker.visible = false;
 scene.add(marker);
 
+// The joints: per joint a line between its two anchors and a small cross at each, one
+// LineSegments for all, placed each frame from the bodies' poses (/api/meshes gives the anchors
+// in the bodies' frames). Drawn over the bodies, as an anchor is usually inside one.
+const SEGMENTS_PER_JOINT = 7;
+let jointDefs = [];
+const jointLines = new THREE.LineSegments(
+  new THREE.BufferGeometry(),
+  new THREE.LineBasicMaterial({ color: 0x28dce6, depthTest: false, transparent: true }),
+);
+jointLines.renderOrder = 1;
+jointLines.frustumCulled = false;
+scene.add(jointLines);
+
 // Per (mesh, fixed) group: one InstancedMesh; for actor i, groupOf[i] = [group, instance].
 let groups = [];
 let groupOf = [];
@@ -117,6 +131,7 @@ async function loadMeshes() {
       }
       scene.add(g.object);
     }
+    setJoints(m.joints || []);
     version = m.version;
   } finally {
     loadingMeshes = false;
@@ -138,6 +153,60 @@ function applyFrame(f) {
     g.object.setMatrixAt(k, m4);
   }
   for (const g of groups) g.object.instanceMatrix.needsUpdate = true;
+  placeJoints(f);
+}
+
+function setJoints(list) {
+  jointDefs = list;
+  const positions = new Float32Array(list.length * SEGMENTS_PER_JOINT * 6);
+  jointLines.geometry.dispose();
+  jointLines.geometry = new THREE.BufferGeometry();
+  jointLines.geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3).setUsage(THREE.DynamicDrawUsage));
+  $('joint-count').textContent = String(list.length);
+  $('joint-count').dataset.drawn = '0';
+  // Shown by default where there are joints; the checkbox keeps the user's choice after.
+  const box = $('show-joints');
+  // The attribute too, so a dumped page shows it.
+  if (!box.dataset.touched) box.defaultChecked = box.checked = list.length > 0;
+}
+
+// A point given in actor i's body frame (`p`), in world coordinates from frame `f`; the world's
+// own frame for the world (i null).
+const bodyQuat = new THREE.Quaternion();
+function toWorld(f, i, p, out) {
+  out.set(p[0], p[1], p[2]);
+  if (i === null || i === undefined || 7 * i + 6 >= f.length) return out;
+  bodyQuat.set(f[7 * i + 3], f[7 * i + 4], f[7 * i + 5], f[7 * i + 6]);
+  out.applyQuaternion(bodyQuat);
+  out.x += f[7 * i]; out.y += f[7 * i + 1]; out.z += f[7 * i + 2];
+  return out;
+}
+
+const onA = new THREE.Vector3();
+const onB = new THREE.Vector3();
+function placeJoints(f) {
+  const show = $('show-joints').checked && jointDefs.length > 0;
+  jointLines.visible = show;
+  $('joint-count').dataset.drawn = show ? String(jointDefs.length) : '0';
+  if (!show) return;
+  // Crosses a fixed size on screen: a share of the camera's distance to what it looks at.
+  const r = 0.012 * camera.position.distanceTo(controls ? controls.target : new THREE.Vector3());
+  const attr = jointLines.geometry.getAttribute('position');
+  const a = attr.array;
+  let k = 0;
+  const put = (p, dx, dy, dz) => { a[k++] = p.x + dx; a[k++] = p.y + dy; a[k++] = p.z + dz; };
+  for (const j of jointDefs) {
+    toWorld(f, j.a, j.anchor_a, onA);
+    toWorld(f, j.b, j.anchor_b, onB);
+    put(onA, 0, 0, 0);
+    put(onB, 0, 0, 0);
+    for (const p of [onA, onB]) {
+      put(p, -r, 0, 0); put(p, r, 0, 0);
+      put(p, 0, -r, 0); put(p, 0, r, 0);
+      put(p, 0, 0, -r); put(p, 0, 0, r);
+    }
+  }
+  attr.needsUpdate = true;
 }
 
 // Frames the scene: the free bodies (all bodies when none is free) from a three-quarter view.
@@ -163,17 +232,29 @@ function fitCamera(f) {
   controls?.update();
 }
 
-// Frames drawn from new server state per second, shown top left of the viewport.
+// Per second: frames drawn from new server state (`data-fps`) and frames rendered
+// (`data-drawn-fps`: the viewport redraws every animation frame, new state or not), shown top
+// left of the viewport; with ?log=1 also on the console, for a headless browser to report.
 let fpsFrames = 0;
+let drawnFrames = 0;
 let fpsSince = performance.now();
 function countFrame() {
   fpsFrames++;
+}
+function countDrawn() {
+  drawnFrames++;
   const now = performance.now();
   if (now - fpsSince >= 1000) {
     const fps = (fpsFrames * 1000) / (now - fpsSince);
-    $('hud').textContent = `${fps.toFixed(0)} frames/s`;
+    const drawn = (drawnFrames * 1000) / (now - fpsSince);
+    $('hud').textContent = `${fps.toFixed(0)} frames/s (${drawn.toFixed(0)} drawn)`;
     $('hud').dataset.fps = fps.toFixed(1);
+    $('hud').dataset.drawnFps = drawn.toFixed(1);
+    if (params.get('log') === '1') {
+      console.log(`studio-fps frames=${fps.toFixed(1)} drawn=${drawn.toFixed(1)} bodies=${groupOf.length} step=${$('time').dataset.step}`);
+    }
     fpsFrames = 0;
+    drawnFrames = 0;
     fpsSince = now;
   }
 }
@@ -227,6 +308,7 @@ function animate() {
   resize();
   controls?.update();
   if (renderer) renderer.render(scene, camera);
+  countDrawn();
   requestAnimationFrame(animate);
 }
 
@@ -335,6 +417,10 @@ $('play').onclick = () => control({ action: 'play' }).catch(() => {});
 $('pause').onclick = () => control({ action: 'pause' }).catch(() => {});
 $('step').onclick = () => control({ action: 'step', steps: 1 }).catch(() => {});
 $('reset').onclick = () => control({ action: 'reset' }).catch(() => {});
+$('show-joints').onchange = () => {
+  $('show-joints').dataset.touched = '1';
+  if (lastFrame) placeJoints(lastFrame);
+};
 $('speed').onchange = (e) => control({ action: 'speed', speed: Number(e.target.value) }).catch(() => {});
 
 async function loadSceneFile(file) {
@@ -541,6 +627,9 @@ async function runScript(list) {
       else if (what === 'untick' || what === 'tick') {
         const box = document.querySelector(`[data-testid="system-${arg}"]`);
         if (box) { box.checked = what === 'tick'; await postSchedule(); }
+      } else if (what === 'joints') {
+        $('show-joints').checked = arg !== 'off';
+        $('show-joints').dispatchEvent(new Event('change'));
       } else if (what === 'wait') await new Promise((r) => setTimeout(r, Number(arg || 100)));
       else if (what === 'select') await select(arg || null);
       else if (what === 'click') {
