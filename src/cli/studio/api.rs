@@ -409,3 +409,44 @@ fn post_mesh(shared: &Shared, query: &str, body: &str) -> Reply {
         Err(e) => Reply::error(500, format!("cannot store {name}: {e}")),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A measurement, printed (no timed tests here): what one `/api/frame` of 4 006 bodies
+    /// costs the server, the HTTP exchange left out (BENCH.md, "Studio at 4 000 bodies").
+    #[test]
+    #[ignore = "a measurement that prints: cargo test --release --lib frame_of_4000 -- --ignored --nocapture"]
+    fn frame_of_4000_bodies() {
+        let text = "Scene(gravity: (0.0, 0.0, 0.0), actors: [], spawners: [BoxGas(actors: 4000, seed: 1)])";
+        let path = std::path::Path::new("box-gas-4000.ron");
+        let def = crate::scene::parse(text, path).expect("parses");
+        let sim = crate::scene::build(&def, path).expect("builds");
+        let studio = Studio {
+            def,
+            path: path.into(),
+            scene_name: "box-gas-4000".into(),
+            sim,
+            running: false,
+            speed: 1.0,
+            schedule: None,
+            version: 1,
+            error: None,
+            mesh_dir: std::env::temp_dir(),
+            steps_per_second: 0.0,
+            added: 0,
+            edits: Vec::new(),
+        };
+        for round in 0..3 {
+            let n = 1000;
+            let start = std::time::Instant::now();
+            let mut bytes = 0;
+            for _ in 0..n {
+                bytes = std::hint::black_box(frame(&studio)).body.len();
+            }
+            let us = start.elapsed().as_secs_f64() * 1e6 / f64::from(n);
+            println!("round {round}: {} bodies, {bytes} bytes, {us:.1} us a frame", studio.sim.len());
+        }
+    }
+}

@@ -53,6 +53,11 @@ scene.background = new THREE.Color(0x2b3038);
 const camera = new THREE.PerspectiveCamera(45, 1, 0.05, 2000);
 camera.position.set(6, 5, 8);
 const controls = renderer ? new OrbitControls(camera, canvas) : null;
+// The viewport is drawn only when something in it changed (a new state, the camera, the size,
+// what is shown): with a software renderer, drawing is what a frame costs, and an idle page
+// then leaves the processor to the simulation.
+let dirty = true;
+controls?.addEventListener('change', () => { dirty = true; });
 scene.add(new THREE.HemisphereLight(0xffffff, 0x445566, 1.6));
 const sun = new THREE.DirectionalLight(0xffffff, 1.8);
 sun.position.set(5, 10, 7);
@@ -154,6 +159,7 @@ function applyFrame(f) {
   }
   for (const g of groups) g.object.instanceMatrix.needsUpdate = true;
   placeJoints(f);
+  dirty = true;
 }
 
 function setJoints(list) {
@@ -187,6 +193,7 @@ const onB = new THREE.Vector3();
 function placeJoints(f) {
   const show = $('show-joints').checked && jointDefs.length > 0;
   jointLines.visible = show;
+  dirty = true;
   $('joint-count').dataset.drawn = show ? String(jointDefs.length) : '0';
   if (!show) return;
   // Crosses a fixed size on screen: a share of the camera's distance to what it looks at.
@@ -232,17 +239,16 @@ function fitCamera(f) {
   controls?.update();
 }
 
-// Per second: frames drawn from new server state (`data-fps`) and frames rendered
-// (`data-drawn-fps`: the viewport redraws every animation frame, new state or not), shown top
-// left of the viewport; with ?log=1 also on the console, for a headless browser to report.
+// Per second: new server states drawn (`data-fps`) and frames drawn (`data-drawn-fps`: also
+// for the camera moving), shown top left of the viewport; with ?log=1 also on the console, for
+// a headless browser to report.
 let fpsFrames = 0;
 let drawnFrames = 0;
 let fpsSince = performance.now();
 function countFrame() {
   fpsFrames++;
 }
-function countDrawn() {
-  drawnFrames++;
+function countSecond() {
   const now = performance.now();
   if (now - fpsSince >= 1000) {
     const fps = (fpsFrames * 1000) / (now - fpsSince);
@@ -260,6 +266,7 @@ function countDrawn() {
 }
 
 let frameInFlight = false;
+let appliedKey = '';
 async function fetchFrame() {
   if (frameInFlight || loadingMeshes) return;
   frameInFlight = true;
@@ -272,6 +279,11 @@ async function fetchFrame() {
       await pollState();
       if (selected) select(selected).catch(() => {});
     }
+    const step = r.headers.get('X-Step');
+    // The same step of the same scene version: the same poses, nothing to draw again.
+    const key = `${version}/${step}`;
+    if (key === appliedKey && lastFrame) return;
+    appliedKey = key;
     const f = new Float32Array(buf);
     lastFrame = f;
     applyFrame(f);
@@ -280,7 +292,6 @@ async function fetchFrame() {
     }
     fitted = sceneName + '/' + version;
     const t = Number(r.headers.get('X-Time'));
-    const step = r.headers.get('X-Step');
     $('time').textContent = `${t.toFixed(3)} s (step ${step})`;
     $('time').dataset.time = String(t);
     $('time').dataset.step = step;
@@ -300,6 +311,7 @@ function resize() {
     renderer.setSize(w, h, false);
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
+    dirty = true;
   }
 }
 
@@ -307,8 +319,12 @@ function animate() {
   fetchFrame();
   resize();
   controls?.update();
-  if (renderer) renderer.render(scene, camera);
-  countDrawn();
+  if (renderer && dirty) {
+    renderer.render(scene, camera);
+    dirty = false;
+    drawnFrames++;
+  }
+  countSecond();
   requestAnimationFrame(animate);
 }
 
@@ -609,6 +625,7 @@ function clickAt(fx, fy) {
       placeAt = hit;
       marker.position.set(hit.x, 0.01, hit.z);
       marker.visible = true;
+      dirty = true;
     }
   }
   return selecting;
