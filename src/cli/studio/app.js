@@ -57,7 +57,11 @@ const controls = renderer ? new OrbitControls(camera, canvas) : null;
 // what is shown): with a software renderer, drawing is what a frame costs, and an idle page
 // then leaves the processor to the simulation.
 let dirty = true;
-controls?.addEventListener('change', () => { dirty = true; });
+controls?.addEventListener('change', () => {
+  dirty = true;
+  // The joints' crosses keep their size on screen as the camera moves.
+  if (lastFrame) placeJoints(lastFrame);
+});
 scene.add(new THREE.HemisphereLight(0xffffff, 0x445566, 1.6));
 const sun = new THREE.DirectionalLight(0xffffff, 1.8);
 sun.position.set(5, 10, 7);
