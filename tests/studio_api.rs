@@ -528,3 +528,23 @@ fn a_saved_scene_with_joints_loads_back_and_runs_the_same() {
     let out = Command::new(env!("CARGO_BIN_EXE_rigid")).arg("check").arg(&file).output().expect("rigid check");
     assert!(out.status.success(), "{}\n{text}", String::from_utf8_lossy(&out.stderr));
 }
+
+#[test]
+fn contacts_are_points_and_unit_normals() {
+    let s = start("scenes/box-drop.ron");
+    let (status, body) = request(&s, "GET", "/api/contacts", b"");
+    assert_eq!((status, body.len()), (200, 0), "no contacts before the first step");
+    // Landed and resting on the floor: one touching pair, its normal vertical.
+    control(&s, json!({"action": "step", "steps": 120}));
+    let (status, body) = request(&s, "GET", "/api/contacts", b"");
+    assert_eq!(status, 200);
+    let f: Vec<f32> = body.chunks(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    let n = get(&s, "/api/state?actors=0")["contacts"].as_u64().expect("contacts") as usize;
+    assert!(n >= 1);
+    assert_eq!(f.len(), 6 * n, "6 floats a contact");
+    for c in f.chunks(6) {
+        let normal = (c[3] * c[3] + c[4] * c[4] + c[5] * c[5]).sqrt();
+        assert!((normal - 1.0).abs() < 1e-5 && c[4].abs() > 0.99, "{c:?}");
+        assert!(c[1].abs() < 0.05, "the contact is on the floor's top: {c:?}");
+    }
+}

@@ -197,3 +197,15 @@ fn joints_are_drawn_where_there_are_any() {
     assert_eq!(element(&dom, "joint-count").1, "0");
     assert!(!element(&dom, "show-joints").0.contains("checked"), "{}", element(&dom, "show-joints").0);
 }
+
+#[test]
+#[ignore = "needs Chromium: .ci/run installs it and runs these"]
+fn contacts_are_drawn_on_demand() {
+    let s = start("scenes/box-drop.ron");
+    let dom = chromium(&format!("http://{}/?script=step:120", s.addr), "--dump-dom", 3000);
+    assert_eq!(attribute(element(&dom, "show-contacts").0, "data-drawn").as_deref(), Some("0"));
+    let dom = chromium(&format!("http://{}/?script=contacts:on", s.addr), "--dump-dom", 3000);
+    let drawn: u32 =
+        attribute(element(&dom, "show-contacts").0, "data-drawn").and_then(|d| d.parse().ok()).expect("data-drawn");
+    assert!(drawn >= 1, "{}", element(&dom, "show-contacts").0);
+}

@@ -121,4 +121,5 @@ pub const PAGE_TEST_IDS: &[&str] = &[
     "save",
     "show-joints",
     "joint-count",
+    "show-contacts",
 ];

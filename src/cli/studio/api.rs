@@ -52,6 +52,7 @@ pub(super) fn handle(mut request: Request, shared: &Shared) {
         (Method::Get, "/OrbitControls.js") => Reply::text("text/javascript; charset=utf-8", ORBIT),
         (Method::Get, "/api/state") => Reply::json(200, &state(&lock(shared), !query.contains("actors=0"))),
         (Method::Get, "/api/frame") => frame(&lock(shared)),
+        (Method::Get, "/api/contacts") => contacts(&lock(shared)),
         (Method::Get, "/api/meshes") => Reply::json(200, &meshes(&lock(shared))),
         (Method::Get, "/api/scene") => match save::scene_ron(&lock(shared)) {
             Ok(text) => Reply {
@@ -189,6 +190,23 @@ fn frame(s: &Studio) -> Reply {
             ("X-Version", s.version.to_string()),
             ("X-Running", s.running.to_string()),
         ],
+    }
+}
+
+/// The last step's contacts, one a touching pair: the point and the unit normal (from B to A)
+/// as 6 little-endian f32s each; step and scene version in headers.
+fn contacts(s: &Studio) -> Reply {
+    let body = crate::io::render::step_contacts(&s.sim)
+        .flat_map(|c| {
+            [c.point.x, c.point.y, c.point.z, c.normal.x, c.normal.y, c.normal.z].map(|v| (v as f32).to_le_bytes())
+        })
+        .flatten()
+        .collect();
+    Reply {
+        status: 200,
+        kind: "application/octet-stream",
+        body,
+        headers: vec![("X-Step", s.sim.steps.to_string()), ("X-Version", s.version.to_string())],
     }
 }
 

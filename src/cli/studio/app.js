@@ -9,6 +9,7 @@
 //                                 edit:FIELD=VALUE (mass, restitution, friction or velocity
 //                                 as "x y z"; posted at once), save (fetch /api/scene into
 //                                 body[data-saved]), joints:on|off (draw the joints or not),
+//                                 contacts:on|off (draw the last step's contacts or not),
 //                                 scene:RON-TEXT (last: it may hold commas)
 
 import * as THREE from './three.module.min.js';
@@ -86,6 +87,17 @@ const jointLines = new THREE.LineSegments(
 jointLines.renderOrder = 1;
 jointLines.frustumCulled = false;
 scene.add(jointLines);
+
+// The last step's contacts, on demand: a short line along each normal (from B to A) and a
+// cross at each point, from /api/contacts, fetched after each new state while shown.
+const contactLines = new THREE.LineSegments(
+  new THREE.BufferGeometry(),
+  new THREE.LineBasicMaterial({ color: 0xffaa22, depthTest: false, transparent: true }),
+);
+contactLines.renderOrder = 1;
+contactLines.frustumCulled = false;
+contactLines.visible = false;
+scene.add(contactLines);
 
 // Per (mesh, fixed) group: one InstancedMesh; for actor i, groupOf[i] = [group, instance].
 let groups = [];
@@ -220,6 +232,42 @@ function placeJoints(f) {
   attr.needsUpdate = true;
 }
 
+let contactsInFlight = false;
+async function fetchContacts() {
+  const box = $('show-contacts');
+  if (!box.checked) {
+    contactLines.visible = false;
+    box.dataset.drawn = '0';
+    dirty = true;
+    return;
+  }
+  if (contactsInFlight) return;
+  contactsInFlight = true;
+  try {
+    const f = new Float32Array(await (await fetch('/api/contacts')).arrayBuffer());
+    const n = f.length / 6;
+    const r = 0.008 * camera.position.distanceTo(controls ? controls.target : new THREE.Vector3());
+    const a = new Float32Array(n * 4 * 6);
+    let k = 0;
+    const put = (x, y, z) => { a[k++] = x; a[k++] = y; a[k++] = z; };
+    for (let i = 0; i < n; i++) {
+      const [x, y, z, nx, ny, nz] = f.subarray(6 * i, 6 * i + 6);
+      put(x, y, z); put(x + 6 * r * nx, y + 6 * r * ny, z + 6 * r * nz);
+      put(x - r, y, z); put(x + r, y, z);
+      put(x, y - r, z); put(x, y + r, z);
+      put(x, y, z - r); put(x, y, z + r);
+    }
+    contactLines.geometry.dispose();
+    contactLines.geometry = new THREE.BufferGeometry();
+    contactLines.geometry.setAttribute('position', new THREE.BufferAttribute(a, 3));
+    contactLines.visible = box.checked;
+    box.dataset.drawn = box.checked ? String(n) : '0';
+    dirty = true;
+  } finally {
+    contactsInFlight = false;
+  }
+}
+
 // Frames the scene: the free bodies (all bodies when none is free) from a three-quarter view.
 function fitCamera(f) {
   const box = new THREE.Box3();
@@ -291,6 +339,7 @@ async function fetchFrame() {
     const f = new Float32Array(buf);
     lastFrame = f;
     applyFrame(f);
+    if ($('show-contacts').checked) fetchContacts().catch(() => {});
     if (fitted !== sceneName + '/' + version && (fitted === '' || !fitted.startsWith(sceneName + '/'))) {
       fitCamera(f);
     }
@@ -441,6 +490,7 @@ $('show-joints').onchange = () => {
   $('show-joints').dataset.touched = '1';
   if (lastFrame) placeJoints(lastFrame);
 };
+$('show-contacts').onchange = () => fetchContacts().catch(() => {});
 $('speed').onchange = (e) => control({ action: 'speed', speed: Number(e.target.value) }).catch(() => {});
 
 async function loadSceneFile(file) {
@@ -651,6 +701,9 @@ async function runScript(list) {
       } else if (what === 'joints') {
         $('show-joints').checked = arg !== 'off';
         $('show-joints').dispatchEvent(new Event('change'));
+      } else if (what === 'contacts') {
+        $('show-contacts').checked = arg !== 'off';
+        await fetchContacts();
       } else if (what === 'wait') await new Promise((r) => setTimeout(r, Number(arg || 100)));
       else if (what === 'select') await select(arg || null);
       else if (what === 'click') {
