@@ -402,11 +402,149 @@ fn a_saved_scene_keeps_edits_and_reloads() {
     assert_eq!(b["friction"].as_f64(), Some(0.2));
 }
 
+/// The scene's joints as the solver holds them (anchors in the bodies' frames).
+fn solver_joints(sim: &rigid_sandbox::Sim) -> Vec<rigid_sandbox::solver::Joint> {
+    sim.ctx.scratch.get::<rigid_sandbox::solver::Joints>().map_or_else(Vec::new, |j| j.joints.clone())
+}
+
+/// Every actor's pose and velocities as bits.
+fn state_bits(sim: &rigid_sandbox::Sim) -> Vec<u64> {
+    sim.actors()
+        .iter()
+        .flat_map(|a| {
+            let mut v = a.pose.position.to_array().to_vec();
+            v.extend(a.pose.orientation.to_array());
+            v.extend(a.velocity.linear.to_array());
+            v.extend(a.velocity.angular.to_array());
+            v
+        })
+        .map(f64::to_bits)
+        .collect()
+}
+
+/// `p` rotated by the unit quaternion `q` ([x, y, z, w]).
+fn rotate(q: &[f64], p: &[f64]) -> [f64; 3] {
+    let (u, w) = ([q[0], q[1], q[2]], q[3]);
+    let cross =
+        |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let t = cross(u, [p[0], p[1], p[2]]).map(|x| 2.0 * x);
+    let c = cross(u, t);
+    [0, 1, 2].map(|k| p[k] + w * t[k] + c[k])
+}
+
 #[test]
-fn scenes_with_joints_are_not_saved() {
-    let s = start("scenes/pendulum.ron");
-    let (status, body) = request(&s, "GET", "/api/scene", b"");
-    assert_eq!(status, 409);
-    let v: Value = serde_json::from_slice(&body).expect("JSON");
-    assert!(v["error"].as_str().expect("error").contains("joints"), "{v}");
+fn joints_are_reported_with_their_anchors_where_they_are_now() {
+    let s = start("scenes/door.ron");
+    let st = get(&s, "/api/state");
+    let joints = st["joints"].as_array().expect("joints");
+    assert_eq!(joints.len(), 1, "{st}");
+    let j = &joints[0];
+    assert_eq!(
+        (j["name"].as_str(), j["kind"].as_str(), j["a"].as_str(), j["b"].as_str()),
+        (Some("hinge"), Some("Hinge"), Some("door"), Some("frame"))
+    );
+    for end in ["anchor_a", "anchor_b"] {
+        assert_eq!(f64s(&j[end]), [0.0, 1.1, 0.0], "{end}: {j}");
+    }
+    // The page's poll leaves the joints out, as the actors.
+    assert_eq!(get(&s, "/api/state?actors=0")["joints"], json!([]));
+
+    // Swung open, A's anchor is the door's body-frame anchor (from /api/meshes) where the door
+    // is now, and both anchors stay together (a hinge).
+    control(&s, json!({"action": "step", "steps": 90}));
+    let st = get(&s, "/api/state");
+    let j = &st["joints"][0];
+    let meshes = get(&s, "/api/meshes");
+    let m = &meshes["joints"][0];
+    assert_eq!((m["a"].as_u64(), m["b"].as_u64(), m["kind"].as_str()), (Some(1), Some(0), Some("Hinge")), "{m}");
+    let door = actor(&st, "door");
+    let lever = rotate(&f64s(&door["orientation"]), &f64s(&m["anchor_a"]));
+    let at = f64s(&door["position"]);
+    let (on_a, on_b) = (f64s(&j["anchor_a"]), f64s(&j["anchor_b"]));
+    for k in 0..3 {
+        assert!((on_a[k] - (at[k] + lever[k])).abs() < 1e-12, "{on_a:?} vs {at:?} + {lever:?}");
+        assert!((on_a[k] - on_b[k]).abs() < 1e-3, "{on_a:?} vs {on_b:?}");
+    }
+    assert!(j["position_error"].as_f64().expect("position_error") < 1e-3, "{j}");
+    // The door has turned: its centre is no longer where it started.
+    assert!((at[0] - 0.45).abs() > 0.05, "{at:?}");
+
+    // A joint to the world names no `b`.
+    let s = start("scenes/chain.ron");
+    let st = get(&s, "/api/state");
+    let joints = st["joints"].as_array().expect("joints");
+    assert_eq!(joints.len(), 31);
+    assert_eq!((joints[0]["name"].as_str(), joints[0]["b"].clone()), (Some("top"), Value::Null));
+    assert_eq!(f64s(&joints[0]["anchor_b"]), [0.0, 7.0, 0.0]);
+    assert_eq!(get(&s, "/api/meshes")["joints"].as_array().expect("joints").len(), 31);
+}
+
+#[test]
+fn a_saved_scene_with_joints_loads_back_and_runs_the_same() {
+    let path = std::path::Path::new("saved.ron");
+    // Saved at the start: the same joints, bit for bit, and 120 steps to the same bits.
+    for scene in ["scenes/chain.ron", "scenes/door.ron", "scenes/slider.ron", "scenes/ragdoll.ron"] {
+        let s = start(scene);
+        let text = get_text(&s, "/api/scene");
+        let original = std::fs::read_to_string(scene).expect("scene");
+        let mut a = rigid_sandbox::scene::build(&rigid_sandbox::scene::parse(&original, path).expect("parses"), path)
+            .expect("builds");
+        let def = rigid_sandbox::scene::parse(&text, path).unwrap_or_else(|e| panic!("{scene}: {e}\n{text}"));
+        let mut b = rigid_sandbox::scene::build(&def, path).expect("builds");
+        let (ja, jb) = (solver_joints(&a), solver_joints(&b));
+        assert!(!ja.is_empty(), "{scene}");
+        assert_eq!(ja, jb, "{scene}: the joints differ\n{text}");
+        a.run(120).expect("steps");
+        b.run(120).expect("steps");
+        assert_eq!(state_bits(&a), state_bits(&b), "{scene}: 120 steps differ");
+    }
+
+    // Saved mid-swing: the joint stands where it stood, its limits where they were (shifted by
+    // the turn so far), so the door stops at the same 90 degrees.
+    let s = start("scenes/door.ron");
+    control(&s, json!({"action": "step", "steps": 60}));
+    let text = get_text(&s, "/api/scene");
+    let st = get(&s, "/api/state");
+    let mut saved = rebuild_matches(&text, &st);
+    let j = &solver_joints(&saved)[0];
+    let door = saved.actors()[1].pose;
+    let on_a = door.position + door.orientation * j.anchor_a;
+    for (x, y) in on_a.to_array().iter().zip(f64s(&st["joints"][0]["anchor_a"])) {
+        assert!((x - y).abs() < 1e-12, "{on_a} vs {}", st["joints"][0]["anchor_a"]);
+    }
+    let rigid_sandbox::solver::JointKind::Hinge { limits: Some([lo, hi]), .. } = j.kind else { panic!("{j:?}") };
+    let turned = 1.5 * 0.5; // rad: 60 steps of 1/120 s at 1.5 rad/s
+    assert!((lo + turned).abs() < 0.02 && (hi - (std::f64::consts::FRAC_PI_2 - turned)).abs() < 0.02, "{lo} {hi}");
+    control(&s, json!({"action": "step", "steps": 120}));
+    saved.run(120).expect("steps");
+    let running = f64s(&actor(&get(&s, "/api/state"), "door")["orientation"]);
+    let reloaded = saved.actors()[1].pose.orientation.to_array();
+    let dot: f64 = running.iter().zip(reloaded).map(|(x, y)| x * y).sum();
+    assert!(dot.abs() > (0.5_f64 * 0.01).cos(), "the door turned differently: {running:?} vs {reloaded:?}");
+    // `rigid check` accepts it.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("scene.ron");
+    std::fs::write(&file, &text).expect("write");
+    let out = Command::new(env!("CARGO_BIN_EXE_rigid")).arg("check").arg(&file).output().expect("rigid check");
+    assert!(out.status.success(), "{}\n{text}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
+fn contacts_are_points_and_unit_normals() {
+    let s = start("scenes/box-drop.ron");
+    let (status, body) = request(&s, "GET", "/api/contacts", b"");
+    assert_eq!((status, body.len()), (200, 0), "no contacts before the first step");
+    // Landed and resting on the floor: one touching pair, its normal vertical.
+    control(&s, json!({"action": "step", "steps": 120}));
+    let (status, body) = request(&s, "GET", "/api/contacts", b"");
+    assert_eq!(status, 200);
+    let f: Vec<f32> = body.chunks(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    let n = get(&s, "/api/state?actors=0")["contacts"].as_u64().expect("contacts") as usize;
+    assert!(n >= 1);
+    assert_eq!(f.len(), 6 * n, "6 floats a contact");
+    for c in f.chunks(6) {
+        let normal = (c[3] * c[3] + c[4] * c[4] + c[5] * c[5]).sqrt();
+        assert!((normal - 1.0).abs() < 1e-5 && c[4].abs() > 0.99, "{c:?}");
+        assert!(c[1].abs() < 0.05, "the contact is on the floor's top: {c:?}");
+    }
 }

@@ -165,3 +165,47 @@ fn a_clicked_actor_is_selected_and_edited() {
     assert!(!element(&dom, "actor-friction").0.contains("disabled"), "{}", element(&dom, "actor-friction").0);
     assert!(dom.contains("data-saved=\"// Saved by rigid studio"), "the page did not fetch the saved scene");
 }
+
+/// Pixels of the joints' colour (cyan, 0x28dce6) right of the side panel in a screenshot.
+fn joint_pixels(url: &str) -> usize {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = dir.path().join("shot.png");
+    chromium(url, &format!("--screenshot={}", png.display()), 3000);
+    let image = image::open(&png).expect("a PNG").to_rgb8();
+    image.enumerate_pixels().filter(|(x, _, p)| *x >= 280 && p.0[0] < 110 && p.0[1] > 170 && p.0[2] > 180).count()
+}
+
+#[test]
+#[ignore = "needs Chromium: .ci/run installs it and runs these"]
+fn joints_are_drawn_where_there_are_any() {
+    let s = start("scenes/chain.ron");
+    let dom = chromium(&format!("http://{}/", s.addr), "--dump-dom", 3000);
+    let (tag, text) = element(&dom, "joint-count");
+    assert_eq!(text, "31");
+    assert_eq!(attribute(tag, "data-drawn").as_deref(), Some("31"), "{tag}");
+    assert!(element(&dom, "show-joints").0.contains("checked"), "{}", element(&dom, "show-joints").0);
+    // Drawn: the joints' colour is on screen, and goes when they are turned off.
+    let on = joint_pixels(&format!("http://{}/", s.addr));
+    let off = joint_pixels(&format!("http://{}/?script=joints:off", s.addr));
+    assert!(on > off + 200, "joints drawn: {on} cyan pixels with, {off} without");
+    let dom = chromium(&format!("http://{}/?script=joints:off", s.addr), "--dump-dom", 3000);
+    assert_eq!(attribute(element(&dom, "joint-count").0, "data-drawn").as_deref(), Some("0"));
+
+    // A scene without joints draws none and leaves the box unticked.
+    let s = start("scenes/box-drop.ron");
+    let dom = chromium(&format!("http://{}/", s.addr), "--dump-dom", 3000);
+    assert_eq!(element(&dom, "joint-count").1, "0");
+    assert!(!element(&dom, "show-joints").0.contains("checked"), "{}", element(&dom, "show-joints").0);
+}
+
+#[test]
+#[ignore = "needs Chromium: .ci/run installs it and runs these"]
+fn contacts_are_drawn_on_demand() {
+    let s = start("scenes/box-drop.ron");
+    let dom = chromium(&format!("http://{}/?script=step:120", s.addr), "--dump-dom", 3000);
+    assert_eq!(attribute(element(&dom, "show-contacts").0, "data-drawn").as_deref(), Some("0"));
+    let dom = chromium(&format!("http://{}/?script=contacts:on", s.addr), "--dump-dom", 3000);
+    let drawn: u32 =
+        attribute(element(&dom, "show-contacts").0, "data-drawn").and_then(|d| d.parse().ok()).expect("data-drawn");
+    assert!(drawn >= 1, "{}", element(&dom, "show-contacts").0);
+}

@@ -119,4 +119,7 @@ pub const PAGE_TEST_IDS: &[&str] = &[
     "actor-velocity",
     "actor-apply",
     "save",
+    "show-joints",
+    "joint-count",
+    "show-contacts",
 ];

@@ -8,7 +8,9 @@
 //                                 click:FX/FY (a click at fractions of the viewport),
 //                                 edit:FIELD=VALUE (mass, restitution, friction or velocity
 //                                 as "x y z"; posted at once), save (fetch /api/scene into
-//                                 body[data-saved]), scene:RON-TEXT (last: it may hold commas)
+//                                 body[data-saved]), joints:on|off (draw the joints or not),
+//                                 contacts:on|off (draw the last step's contacts or not),
+//                                 scene:RON-TEXT (last: it may hold commas)
 
 import * as THREE from './three.module.min.js';
 import { OrbitControls } from './OrbitControls.js';
@@ -52,6 +54,15 @@ scene.background = new THREE.Color(0x2b3038);
 const camera = new THREE.PerspectiveCamera(45, 1, 0.05, 2000);
 camera.position.set(6, 5, 8);
 const controls = renderer ? new OrbitControls(camera, canvas) : null;
+// The viewport is drawn only when something in it changed (a new state, the camera, the size,
+// what is shown): with a software renderer, drawing is what a frame costs, and an idle page
+// then leaves the processor to the simulation.
+let dirty = true;
+controls?.addEventListener('change', () => {
+  dirty = true;
+  // The joints' crosses keep their size on screen as the camera moves.
+  if (lastFrame) placeJoints(lastFrame);
+});
 scene.add(new THREE.HemisphereLight(0xffffff, 0x445566, 1.6));
 const sun = new THREE.DirectionalLight(0xffffff, 1.8);
 sun.position.set(5, 10, 7);
@@ -63,6 +74,30 @@ const marker = new THREE.Mesh(new THREE.RingGeometry(0.15, 0.25, 24), new THREE.
 marker.rotation.x = -Math.PI / 2;
 marker.visible = false;
 scene.add(marker);
+
+// The joints: per joint a line between its two anchors and a small cross at each, one
+// LineSegments for all, placed each frame from the bodies' poses (/api/meshes gives the anchors
+// in the bodies' frames). Drawn over the bodies, as an anchor is usually inside one.
+const SEGMENTS_PER_JOINT = 7;
+let jointDefs = [];
+const jointLines = new THREE.LineSegments(
+  new THREE.BufferGeometry(),
+  new THREE.LineBasicMaterial({ color: 0x28dce6, depthTest: false, transparent: true }),
+);
+jointLines.renderOrder = 1;
+jointLines.frustumCulled = false;
+scene.add(jointLines);
+
+// The last step's contacts, on demand: a short line along each normal (from B to A) and a
+// cross at each point, from /api/contacts, fetched after each new state while shown.
+const contactLines = new THREE.LineSegments(
+  new THREE.BufferGeometry(),
+  new THREE.LineBasicMaterial({ color: 0xffaa22, depthTest: false, transparent: true }),
+);
+contactLines.renderOrder = 1;
+contactLines.frustumCulled = false;
+contactLines.visible = false;
+scene.add(contactLines);
 
 // Per (mesh, fixed) group: one InstancedMesh; for actor i, groupOf[i] = [group, instance].
 let groups = [];
@@ -117,6 +152,7 @@ async function loadMeshes() {
       }
       scene.add(g.object);
     }
+    setJoints(m.joints || []);
     version = m.version;
   } finally {
     loadingMeshes = false;
@@ -138,6 +174,98 @@ function applyFrame(f) {
     g.object.setMatrixAt(k, m4);
   }
   for (const g of groups) g.object.instanceMatrix.needsUpdate = true;
+  placeJoints(f);
+  dirty = true;
+}
+
+function setJoints(list) {
+  jointDefs = list;
+  const positions = new Float32Array(list.length * SEGMENTS_PER_JOINT * 6);
+  jointLines.geometry.dispose();
+  jointLines.geometry = new THREE.BufferGeometry();
+  jointLines.geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3).setUsage(THREE.DynamicDrawUsage));
+  $('joint-count').textContent = String(list.length);
+  $('joint-count').dataset.drawn = '0';
+  // Shown by default where there are joints; the checkbox keeps the user's choice after.
+  const box = $('show-joints');
+  // The attribute too, so a dumped page shows it.
+  if (!box.dataset.touched) box.defaultChecked = box.checked = list.length > 0;
+}
+
+// A point given in actor i's body frame (`p`), in world coordinates from frame `f`; the world's
+// own frame for the world (i null).
+const bodyQuat = new THREE.Quaternion();
+function toWorld(f, i, p, out) {
+  out.set(p[0], p[1], p[2]);
+  if (i === null || i === undefined || 7 * i + 6 >= f.length) return out;
+  bodyQuat.set(f[7 * i + 3], f[7 * i + 4], f[7 * i + 5], f[7 * i + 6]);
+  out.applyQuaternion(bodyQuat);
+  out.x += f[7 * i]; out.y += f[7 * i + 1]; out.z += f[7 * i + 2];
+  return out;
+}
+
+const onA = new THREE.Vector3();
+const onB = new THREE.Vector3();
+function placeJoints(f) {
+  const show = $('show-joints').checked && jointDefs.length > 0;
+  jointLines.visible = show;
+  dirty = true;
+  $('joint-count').dataset.drawn = show ? String(jointDefs.length) : '0';
+  if (!show) return;
+  // Crosses a fixed size on screen: a share of the camera's distance to what it looks at.
+  const r = 0.012 * camera.position.distanceTo(controls ? controls.target : new THREE.Vector3());
+  const attr = jointLines.geometry.getAttribute('position');
+  const a = attr.array;
+  let k = 0;
+  const put = (p, dx, dy, dz) => { a[k++] = p.x + dx; a[k++] = p.y + dy; a[k++] = p.z + dz; };
+  for (const j of jointDefs) {
+    toWorld(f, j.a, j.anchor_a, onA);
+    toWorld(f, j.b, j.anchor_b, onB);
+    put(onA, 0, 0, 0);
+    put(onB, 0, 0, 0);
+    for (const p of [onA, onB]) {
+      put(p, -r, 0, 0); put(p, r, 0, 0);
+      put(p, 0, -r, 0); put(p, 0, r, 0);
+      put(p, 0, 0, -r); put(p, 0, 0, r);
+    }
+  }
+  attr.needsUpdate = true;
+}
+
+let contactsInFlight = false;
+async function fetchContacts() {
+  const box = $('show-contacts');
+  if (!box.checked) {
+    contactLines.visible = false;
+    box.dataset.drawn = '0';
+    dirty = true;
+    return;
+  }
+  if (contactsInFlight) return;
+  contactsInFlight = true;
+  try {
+    const f = new Float32Array(await (await fetch('/api/contacts')).arrayBuffer());
+    const n = f.length / 6;
+    const r = 0.008 * camera.position.distanceTo(controls ? controls.target : new THREE.Vector3());
+    const a = new Float32Array(n * 4 * 6);
+    let k = 0;
+    const put = (x, y, z) => { a[k++] = x; a[k++] = y; a[k++] = z; };
+    for (let i = 0; i < n; i++) {
+      const [x, y, z, nx, ny, nz] = f.subarray(6 * i, 6 * i + 6);
+      put(x, y, z); put(x + 6 * r * nx, y + 6 * r * ny, z + 6 * r * nz);
+      put(x - r, y, z); put(x + r, y, z);
+      put(x, y - r, z); put(x, y + r, z);
+      put(x, y, z - r); put(x, y, z + r);
+    }
+    contactLines.geometry.dispose();
+    contactLines.geometry = new THREE.BufferGeometry();
+    contactLines.geometry.setAttribute('position', new THREE.BufferAttribute(a, 3));
+    contactLines.visible = box.checked;
+    box.dataset.drawn = box.checked ? String(n) : '0';
+    dirty = true;
+  } finally {
+    contactsInFlight = false;
+  }
 }
 
 // Frames the scene: the free bodies (all bodies when none is free) from a three-quarter view.
@@ -163,22 +291,34 @@ function fitCamera(f) {
   controls?.update();
 }
 
-// Frames drawn from new server state per second, shown top left of the viewport.
+// Per second: new server states drawn (`data-fps`) and frames drawn (`data-drawn-fps`: also
+// for the camera moving), shown top left of the viewport; with ?log=1 also on the console, for
+// a headless browser to report.
 let fpsFrames = 0;
+let drawnFrames = 0;
 let fpsSince = performance.now();
 function countFrame() {
   fpsFrames++;
+}
+function countSecond() {
   const now = performance.now();
   if (now - fpsSince >= 1000) {
     const fps = (fpsFrames * 1000) / (now - fpsSince);
-    $('hud').textContent = `${fps.toFixed(0)} frames/s`;
+    const drawn = (drawnFrames * 1000) / (now - fpsSince);
+    $('hud').textContent = `${fps.toFixed(0)} frames/s (${drawn.toFixed(0)} drawn)`;
     $('hud').dataset.fps = fps.toFixed(1);
+    $('hud').dataset.drawnFps = drawn.toFixed(1);
+    if (params.get('log') === '1') {
+      console.log(`studio-fps frames=${fps.toFixed(1)} drawn=${drawn.toFixed(1)} bodies=${groupOf.length} step=${$('time').dataset.step}`);
+    }
     fpsFrames = 0;
+    drawnFrames = 0;
     fpsSince = now;
   }
 }
 
 let frameInFlight = false;
+let appliedKey = '';
 async function fetchFrame() {
   if (frameInFlight || loadingMeshes) return;
   frameInFlight = true;
@@ -191,15 +331,20 @@ async function fetchFrame() {
       await pollState();
       if (selected) select(selected).catch(() => {});
     }
+    const step = r.headers.get('X-Step');
+    // The same step of the same scene version: the same poses, nothing to draw again.
+    const key = `${version}/${step}`;
+    if (key === appliedKey && lastFrame) return;
+    appliedKey = key;
     const f = new Float32Array(buf);
     lastFrame = f;
     applyFrame(f);
+    if ($('show-contacts').checked) fetchContacts().catch(() => {});
     if (fitted !== sceneName + '/' + version && (fitted === '' || !fitted.startsWith(sceneName + '/'))) {
       fitCamera(f);
     }
     fitted = sceneName + '/' + version;
     const t = Number(r.headers.get('X-Time'));
-    const step = r.headers.get('X-Step');
     $('time').textContent = `${t.toFixed(3)} s (step ${step})`;
     $('time').dataset.time = String(t);
     $('time').dataset.step = step;
@@ -219,6 +364,7 @@ function resize() {
     renderer.setSize(w, h, false);
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
+    dirty = true;
   }
 }
 
@@ -226,7 +372,12 @@ function animate() {
   fetchFrame();
   resize();
   controls?.update();
-  if (renderer) renderer.render(scene, camera);
+  if (renderer && dirty) {
+    renderer.render(scene, camera);
+    dirty = false;
+    drawnFrames++;
+  }
+  countSecond();
   requestAnimationFrame(animate);
 }
 
@@ -335,6 +486,11 @@ $('play').onclick = () => control({ action: 'play' }).catch(() => {});
 $('pause').onclick = () => control({ action: 'pause' }).catch(() => {});
 $('step').onclick = () => control({ action: 'step', steps: 1 }).catch(() => {});
 $('reset').onclick = () => control({ action: 'reset' }).catch(() => {});
+$('show-joints').onchange = () => {
+  $('show-joints').dataset.touched = '1';
+  if (lastFrame) placeJoints(lastFrame);
+};
+$('show-contacts').onchange = () => fetchContacts().catch(() => {});
 $('speed').onchange = (e) => control({ action: 'speed', speed: Number(e.target.value) }).catch(() => {});
 
 async function loadSceneFile(file) {
@@ -523,6 +679,7 @@ function clickAt(fx, fy) {
       placeAt = hit;
       marker.position.set(hit.x, 0.01, hit.z);
       marker.visible = true;
+      dirty = true;
     }
   }
   return selecting;
@@ -541,6 +698,12 @@ async function runScript(list) {
       else if (what === 'untick' || what === 'tick') {
         const box = document.querySelector(`[data-testid="system-${arg}"]`);
         if (box) { box.checked = what === 'tick'; await postSchedule(); }
+      } else if (what === 'joints') {
+        $('show-joints').checked = arg !== 'off';
+        $('show-joints').dispatchEvent(new Event('change'));
+      } else if (what === 'contacts') {
+        $('show-contacts').checked = arg !== 'off';
+        await fetchContacts();
       } else if (what === 'wait') await new Promise((r) => setTimeout(r, Number(arg || 100)));
       else if (what === 'select') await select(arg || null);
       else if (what === 'click') {

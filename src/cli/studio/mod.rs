@@ -3,6 +3,7 @@
 //! HTTP requests (a few worker threads, `tiny_http`) read and change it under one mutex.
 
 mod api;
+mod joints;
 mod save;
 
 use super::AppError;

@@ -132,16 +132,16 @@ pub(crate) fn apply(sim: &mut Sim, name: &str, edit: &ActorEdit) -> Result<(), S
 
 /// A float as RON reads it back exactly: the shortest round-trip digits, with a `.0` on whole
 /// numbers.
-fn num(x: Scalar) -> String {
+pub(super) fn num(x: Scalar) -> String {
     let s = format!("{x}");
     if s.contains(['.', 'e', 'E', 'i', 'N']) { s } else { format!("{s}.0") }
 }
 
-fn v3(v: Vector) -> String {
+pub(super) fn v3(v: Vector) -> String {
     format!("({}, {}, {})", num(v.x), num(v.y), num(v.z))
 }
 
-fn quoted(s: &str) -> String {
+pub(super) fn quoted(s: &str) -> String {
     let mut out = String::from("\"");
     for c in s.chars() {
         match c {
@@ -186,14 +186,8 @@ fn euler_degrees(q: crate::math::Quat) -> Vector {
 
 /// The running scene as RON text `rigid check` accepts: every actor (spawners' included) where
 /// it is now, with its current mass, velocities and material; the scene's `dt`, `steps`,
-/// gravity, solver and camera; the schedule in use. Scenes with joints are refused: their
-/// anchors are given in world coordinates at the start.
+/// gravity, solver and camera; the schedule in use; the joints as they stand now.
 pub(crate) fn scene_ron(s: &Studio) -> Result<String, String> {
-    if !s.def.joints.is_empty() {
-        return Err("saving a scene with joints is not supported: joint anchors are given at the start \
-                    positions, which a saved scene moves"
-            .into());
-    }
     let instances = crate::scene::instantiate::instances(&s.def, &s.path).map_err(|e| e.to_string())?;
     let base = crate::scene::base_dir(&s.path);
     let sim = &s.sim;
@@ -274,6 +268,8 @@ pub(crate) fn scene_ron(s: &Studio) -> Result<String, String> {
         let _ =
             writeln!(out, ", restitution: {}, friction: {}, fixed: {fixed}),", num(mat.restitution), num(mat.friction));
     }
-    out.push_str("    ],\n)\n");
+    out.push_str("    ],\n");
+    out.push_str(&super::joints::ron(sim));
+    out.push_str(")\n");
     Ok(out)
 }

@@ -1,0 +1,113 @@
+//! A measurement, not a check (no timed tests in this project): `rigid studio` with 4 000
+//! bodies, what a frame costs the server and what the page achieves in headless Chromium, in
+//! real time. Prints; asserts only that there was something to measure. Run on demand:
+//! `cargo test --release --test studio_fps -- --ignored --nocapture` (BENCH.md, "Studio at
+//! 4 000 bodies"). `CHROMIUM` names another browser binary; `STUDIO_FPS_SCENE` another scene.
+
+mod common;
+use common::studio::{Studio, get, request, start};
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const BOX_GAS_4000: &str = "Scene(dt: 0.016666666666666666, gravity: (0.0, 0.0, 0.0), actors: [],
+      spawners: [BoxGas(actors: 4000, seed: 1)])";
+
+/// `GET /api/frame` `n` times in a row: the mean time a frame [ms] and its size [bytes].
+fn frames(s: &Studio, n: u32) -> (f64, usize) {
+    let start = Instant::now();
+    let mut bytes = 0;
+    for _ in 0..n {
+        let (status, body) = request(s, "GET", "/api/frame", b"");
+        assert_eq!(status, 200);
+        bytes = body.len();
+    }
+    (start.elapsed().as_secs_f64() * 1e3 / f64::from(n), bytes)
+}
+
+/// Runs headless Chromium on `url` for `seconds` of real time and returns the page's
+/// `studio-fps` console lines (`?log=1`).
+fn page_fps(url: &str, seconds: u32) -> Vec<String> {
+    let profile = tempfile::tempdir().expect("temp dir");
+    let binary = std::env::var("CHROMIUM").unwrap_or_else(|_| "chromium".to_string());
+    let mut child = Command::new("timeout")
+        .arg(seconds.to_string())
+        .arg(binary)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--use-gl=swiftshader",
+            "--enable-unsafe-swiftshader",
+            "--no-first-run",
+            "--hide-scrollbars",
+            "--window-size=1000,700",
+            "--enable-logging=stderr",
+            "--v=0",
+        ])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .arg(url)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("chromium runs (apt-get install chromium)");
+    let lines = BufReader::new(child.stderr.take().expect("stderr")).lines();
+    let found = lines
+        .map_while(Result::ok)
+        .filter_map(|l| {
+            l.find("studio-fps ").map(|at| l[at..].trim_end_matches(|c| c != '"').trim_end_matches('"').to_string())
+        })
+        .collect();
+    let _ = child.wait();
+    found
+}
+
+/// The number after `key=` in a `studio-fps` line.
+fn field(line: &str, key: &str) -> f64 {
+    line.split_whitespace().find_map(|w| w.strip_prefix(key)?.strip_prefix('=')?.parse().ok()).unwrap_or(f64::NAN)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+#[test]
+#[ignore = "a measurement that prints: cargo test --release --test studio_fps -- --ignored --nocapture"]
+fn studio_at_4000_bodies() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = std::env::var("STUDIO_FPS_SCENE").unwrap_or_else(|_| {
+        let path = dir.path().join("box-gas-4000.ron");
+        std::fs::write(&path, BOX_GAS_4000).expect("write");
+        path.display().to_string()
+    });
+    let s = start(&scene);
+    let bodies = get(&s, "/api/state?actors=0")["actor_count"].as_u64().expect("actor_count");
+    let (paused_ms, bytes) = frames(&s, 200);
+    println!("{bodies} bodies: /api/frame {bytes} bytes, {paused_ms:.3} ms a request paused (200 in a row)");
+    let (_, step) = request(&s, "POST", "/api/control", br#"{"action": "step", "steps": 60}"#);
+    assert!(!step.is_empty());
+    let st = get(&s, "/api/state?actors=0");
+    println!("a step: {:.2} ms (the last of 60 stepped at once)", st["step_ms"].as_f64().unwrap_or(f64::NAN));
+
+    request(&s, "POST", "/api/control", br#"{"action": "play"}"#);
+    std::thread::sleep(Duration::from_secs(2));
+    let (playing_ms, _) = frames(&s, 200);
+    let sps = get(&s, "/api/state?actors=0")["steps_per_second"].as_f64().unwrap_or(f64::NAN);
+    println!("playing at 1x: {playing_ms:.3} ms a request, {sps:.1} steps/s (real time: 60)");
+
+    let lines = page_fps(&format!("http://{}/?log=1", s.addr), 20);
+    for l in &lines {
+        println!("  {l}");
+    }
+    let sps = get(&s, "/api/state?actors=0")["steps_per_second"].as_f64().unwrap_or(f64::NAN);
+    // The first seconds load the page and the meshes.
+    let settled: Vec<&String> = lines.iter().skip(3).collect();
+    assert!(!settled.is_empty(), "the page reported no frame rate: {lines:?}");
+    let drawn = median(settled.iter().map(|l| field(l, "drawn")).collect());
+    let fetched = median(settled.iter().map(|l| field(l, "frames")).collect());
+    println!(
+        "page, headless Chromium (swiftshader, 1000x700), playing: median {drawn:.1} frames drawn/s, \
+         {fetched:.1} new states/s; server meanwhile {sps:.1} steps/s"
+    );
+}
