@@ -347,8 +347,8 @@ mod tests {
         let mut points = vec![PointRows::default()];
         let mut batches = [batch];
         let store: &mut [SolverBody] = &mut bodies;
-        sweep(store, &mut batches, &mut points, 1.0 / 240.0, Some(Softness::new(1.0 / 240.0)));
-        sweep(store, &mut batches, &mut points, 1.0 / 240.0, None);
+        sweep(store, &mut batches, &mut points, 1.0 / 240.0, Some(Softness::new(1.0 / 240.0)), true);
+        sweep(store, &mut batches, &mut points, 1.0 / 240.0, None, false);
         warm_start(store, &batches, &mut points);
         assert_eq!(bodies[0].v, Vector::X);
         assert_eq!(bodies[1], SolverBody::default(), "the static slot stays zero");
