@@ -102,10 +102,18 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     }
 }
 
+/// The group of the constraints across the two sides (`SolveScratch::groups`).
+const ACROSS: u8 = 2;
+
 /// Places group `which`'s constraints in batches (`solver::place`), each batch as long as its
 /// longest manifold, and makes room for their points.
 pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
-    super::place(&group.slots, group.static_slot, &mut group.last, &mut group.fill, &mut group.placed);
+    if which == ACROSS {
+        // One chain up the cut: packed, not one constraint a batch (`place_packed`).
+        super::place_packed(&group.slots, group.static_slot, &mut group.fill, &mut group.placed);
+    } else {
+        super::place(&group.slots, group.static_slot, &mut group.last, &mut group.fill, &mut group.placed);
+    }
     group.batches.clear();
     group.batches.extend(group.fill.iter().map(|_| Batch::idle(group.static_slot)));
     for (held, &(batch, _)) in held.iter().filter(|h| h.group == which).zip(&group.placed) {
