@@ -2,7 +2,7 @@
 //! bodies (with the split in two sides), batches of independent constraints, and each held
 //! pair's rows with the impulses of last step's matching points.
 
-use super::{Batch, Constraint, ContactPoint, Friction, PointRows, SolverBody};
+use super::{Batch, Constraint, ContactPoint, Friction, LANES, PointRows, SolverBody};
 use crate::collision::contact::Pair;
 use crate::collision::manifold::Manifold;
 use crate::math::{Mat3, Scalar, Vector, total_order_key};
@@ -106,7 +106,9 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
 const ACROSS: u8 = 2;
 
 /// Places group `which`'s constraints in batches (`solver::place`), each batch as long as its
-/// longest manifold, and makes room for their points.
+/// longest manifold, and makes room for their points. The lanes and points `fill` writes whole
+/// are left as they are (last step's, in reused memory); only the others are made idle here.
+/// Clearing every batch and point afresh wrote the whole solver state twice a step.
 pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
     if which == ACROSS {
         // One chain up the cut: packed, not one constraint a batch (`place_packed`).
@@ -114,19 +116,40 @@ pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGr
     } else {
         super::place(&group.slots, group.static_slot, &mut group.last, &mut group.fill, &mut group.placed);
     }
-    group.batches.clear();
-    group.batches.extend(group.fill.iter().map(|_| Batch::idle(group.static_slot)));
-    for (held, &(batch, _)) in held.iter().filter(|h| h.group == which).zip(&group.placed) {
-        let batch = &mut group.batches[batch as usize];
+    let ConstraintGroup { batches, points, fill, placed, static_slot, .. } = group;
+    batches.resize(fill.len(), Batch::default());
+    let idle = Constraint::idle(*static_slot);
+    for (batch, &count) in batches.iter_mut().zip(fill.iter()) {
+        batch.len = 0;
+        for l in usize::from(count)..LANES {
+            batch.set(l, &idle);
+        }
+    }
+    let mine = || held.iter().filter(|h| h.group == which).zip(placed.iter());
+    for (held, &(batch, _)) in mine() {
+        let batch = &mut batches[batch as usize];
         batch.len = batch.len.max(u32::from(held.len));
     }
     let mut first = 0;
-    for batch in &mut group.batches {
+    for batch in batches.iter_mut() {
         batch.first = first;
         first += batch.len;
     }
-    group.points.clear();
-    group.points.resize(first as usize, PointRows::default());
+    points.resize(first as usize, PointRows::default());
+    // Idle points: every point of an idle lane, and a lane's beyond its own manifold's.
+    for (batch, &count) in batches.iter().zip(fill.iter()) {
+        for row in &mut points[batch.first as usize..(batch.first + batch.len) as usize] {
+            for l in usize::from(count)..LANES {
+                row.set(l, &ContactPoint::IDLE);
+            }
+        }
+    }
+    for (held, &(batch, lane)) in mine() {
+        let batch = &batches[batch as usize];
+        for row in &mut points[(batch.first + u32::from(held.len)) as usize..(batch.first + batch.len) as usize] {
+            row.set(usize::from(lane), &ContactPoint::IDLE);
+        }
+    }
 }
 
 /// What `fill` reads.
