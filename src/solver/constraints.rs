@@ -201,8 +201,10 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
         for (j, (&p, &gap)) in m.points().iter().zip(&m.gaps).enumerate() {
             let r = [p - b.position[ia], p - b.position[ib]];
             let g = [scale[0] * r[0].cross(n), scale[1] * r[1].cross(n)];
-            let approach =
-                (before_a + b.angular_velocity[ia].cross(r[0]) - before_b - b.angular_velocity[ib].cross(r[1])).dot(n);
+            // Needed only by a new point (below): a recycled manifold's points never bounce.
+            let approach = || {
+                (before_a + b.angular_velocity[ia].cross(r[0]) - before_b - b.angular_velocity[ib].cross(r[1])).dot(n)
+            };
             // A recycled point is last step's own; a new one takes the impulse of the old
             // point at the same place on A, if any.
             let old = cached.and_then(|c| {
@@ -218,7 +220,7 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
                 gap,
                 // Only a new point bounces (rapier's rule): one held since last step is resting
                 // or rocking on it, and bouncing there keeps a settling pile astir.
-                approach: if old.is_some() { 0.0 } else { approach },
+                approach: if old.is_some() { 0.0 } else { approach() },
                 max_impulse: 0.0,
                 lever: (p - centre).length(),
                 coupling: 0.0,
