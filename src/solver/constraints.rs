@@ -2,7 +2,7 @@
 //! bodies (with the split in two sides), batches of independent constraints, and each held
 //! pair's rows with the impulses of last step's matching points.
 
-use super::{Batch, Constraint, ContactPoint, Friction, PointRows, SolverBody};
+use super::{Batch, Constraint, ContactPoint, Friction, LANES, PointRows, SolverBody};
 use crate::collision::contact::Pair;
 use crate::collision::manifold::Manifold;
 use crate::math::{Mat3, Scalar, Vector, total_order_key};
@@ -102,23 +102,54 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     }
 }
 
+/// The group of the constraints across the two sides (`SolveScratch::groups`).
+const ACROSS: u8 = 2;
+
 /// Places group `which`'s constraints in batches (`solver::place`), each batch as long as its
-/// longest manifold, and makes room for their points.
+/// longest manifold, and makes room for their points. The lanes and points `fill` writes whole
+/// are left as they are (last step's, in reused memory); only the others are made idle here.
+/// Clearing every batch and point afresh wrote the whole solver state twice a step.
 pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
-    super::place(&group.slots, group.static_slot, &mut group.last, &mut group.fill, &mut group.placed);
-    group.batches.clear();
-    group.batches.extend(group.fill.iter().map(|_| Batch::idle(group.static_slot)));
-    for (held, &(batch, _)) in held.iter().filter(|h| h.group == which).zip(&group.placed) {
-        let batch = &mut group.batches[batch as usize];
+    if which == ACROSS {
+        // One chain up the cut: packed, not one constraint a batch (`place_packed`).
+        super::place_packed(&group.slots, group.static_slot, &mut group.fill, &mut group.placed);
+    } else {
+        super::place(&group.slots, group.static_slot, &mut group.last, &mut group.fill, &mut group.placed);
+    }
+    let ConstraintGroup { batches, points, fill, placed, static_slot, .. } = group;
+    batches.resize(fill.len(), Batch::default());
+    let idle = Constraint::idle(*static_slot);
+    for (batch, &count) in batches.iter_mut().zip(fill.iter()) {
+        batch.len = 0;
+        for l in usize::from(count)..LANES {
+            batch.set(l, &idle);
+        }
+    }
+    let mine = || held.iter().filter(|h| h.group == which).zip(placed.iter());
+    for (held, &(batch, _)) in mine() {
+        let batch = &mut batches[batch as usize];
         batch.len = batch.len.max(u32::from(held.len));
     }
     let mut first = 0;
-    for batch in &mut group.batches {
+    for batch in batches.iter_mut() {
         batch.first = first;
         first += batch.len;
     }
-    group.points.clear();
-    group.points.resize(first as usize, PointRows::default());
+    points.resize(first as usize, PointRows::default());
+    // Idle points: every point of an idle lane, and a lane's beyond its own manifold's.
+    for (batch, &count) in batches.iter().zip(fill.iter()) {
+        for row in &mut points[batch.first as usize..(batch.first + batch.len) as usize] {
+            for l in usize::from(count)..LANES {
+                row.set(l, &ContactPoint::IDLE);
+            }
+        }
+    }
+    for (held, &(batch, lane)) in mine() {
+        let batch = &batches[batch as usize];
+        for row in &mut points[(batch.first + u32::from(held.len)) as usize..(batch.first + batch.len) as usize] {
+            row.set(usize::from(lane), &ContactPoint::IDLE);
+        }
+    }
 }
 
 /// What `fill` reads.
@@ -170,8 +201,10 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
         for (j, (&p, &gap)) in m.points().iter().zip(&m.gaps).enumerate() {
             let r = [p - b.position[ia], p - b.position[ib]];
             let g = [scale[0] * r[0].cross(n), scale[1] * r[1].cross(n)];
-            let approach =
-                (before_a + b.angular_velocity[ia].cross(r[0]) - before_b - b.angular_velocity[ib].cross(r[1])).dot(n);
+            // Needed only by a new point (below): a recycled manifold's points never bounce.
+            let approach = || {
+                (before_a + b.angular_velocity[ia].cross(r[0]) - before_b - b.angular_velocity[ib].cross(r[1])).dot(n)
+            };
             // A recycled point is last step's own; a new one takes the impulse of the old
             // point at the same place on A, if any.
             let old = cached.and_then(|c| {
@@ -187,7 +220,7 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
                 gap,
                 // Only a new point bounces (rapier's rule): one held since last step is resting
                 // or rocking on it, and bouncing there keeps a settling pile astir.
-                approach: if old.is_some() { 0.0 } else { approach },
+                approach: if old.is_some() { 0.0 } else { approach() },
                 max_impulse: 0.0,
                 lever: (p - centre).length(),
                 coupling: 0.0,

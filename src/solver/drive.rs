@@ -29,12 +29,13 @@ pub(crate) enum Step {
     Move(Scalar),
 }
 
-/// Runs `pass` on `group` with its bodies `bodies`.
-fn run<B: BodyStore + ?Sized>(pass: Pass, bodies: &mut B, group: &mut ConstraintGroup, h: Scalar) {
+/// Runs `pass` on `group` with its bodies `bodies`; `fresh`: the bodies have moved since the
+/// last sweep, which must work the gaps out again (`kernel::sweep`).
+fn run<B: BodyStore + ?Sized>(pass: Pass, bodies: &mut B, group: &mut ConstraintGroup, h: Scalar, fresh: bool) {
     match pass {
         Pass::Warm => super::warm_start(bodies, &group.batches, &mut group.points),
-        Pass::Solve(soft) => super::sweep(bodies, &mut group.batches, &mut group.points, h, Some(soft)),
-        Pass::Relax => super::sweep(bodies, &mut group.batches, &mut group.points, h, None),
+        Pass::Solve(soft) => super::sweep(bodies, &mut group.batches, &mut group.points, h, Some(soft), fresh),
+        Pass::Relax => super::sweep(bodies, &mut group.batches, &mut group.points, h, None, fresh),
         Pass::Restitution(threshold) => super::restitution(bodies, &group.batches, &mut group.points, threshold),
     }
 }
@@ -64,21 +65,26 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
     let [first, second, across] = &mut s.groups;
     let (left, right) = s.bodies.split_at_mut(s.left + 1);
     let threaded = !second.batches.is_empty() && rayon::current_num_threads() > 1;
+    // The gaps change only with a move: the first sweep after one works them out for the rest.
+    let mut moved = true;
     for &step in plan {
         let Step::Pass(pass) = step else {
             apply(step, left);
             apply(step, right);
             joints.stale |= matches!(step, Step::Move(_));
+            moved |= matches!(step, Step::Move(_));
             continue;
         };
+        let fresh = moved && matches!(pass, Pass::Solve(_) | Pass::Relax);
+        moved &= !fresh;
         if threaded {
-            rayon::join(|| run(pass, left, first, h), || run(pass, right, second, h));
+            rayon::join(|| run(pass, left, first, h, fresh), || run(pass, right, second, h, fresh));
         } else {
-            run(pass, left, first, h);
-            run(pass, right, second, h);
+            run(pass, left, first, h, fresh);
+            run(pass, right, second, h, fresh);
         }
         if !across.batches.is_empty() {
-            run(pass, &mut Sides { left: &mut *left, right: &mut *right }, across, h);
+            run(pass, &mut Sides { left: &mut *left, right: &mut *right }, across, h, fresh);
         }
         let joint = match pass {
             Pass::Warm => Some(JointPass::Warm),

@@ -221,6 +221,10 @@ pub fn warm_start<B: BodyStore + ?Sized>(bodies: &mut B, batches: &[Batch], poin
 /// One Gauss–Seidel sweep through the batches in order (the `solve` system orders the
 /// constraints lowest first, so one sweep carries a stack's support from the ground up).
 ///
+/// The points' gaps change only when the substeps move the bodies on: with `fresh` the sweep
+/// works them out from the bodies' displacements and keeps them (`PointRows::now`), else it
+/// reads those kept by the last fresh sweep, the same numbers without gathering the motion.
+///
 /// The solve pass (`soft` given) holds the normals with soft position feedback; the relax
 /// pass (`None`) solves friction, holds the normals rigidly, taking a manifold's pairs of
 /// points in reverse order (so neither end of a manifold is always first), and solves friction
@@ -232,9 +236,11 @@ pub fn sweep<B: BodyStore + ?Sized>(
     points: &mut [PointRows],
     h: Scalar,
     soft: Option<Softness>,
+    fresh: bool,
 ) {
     for batch in batches {
-        let motion = Motion::open(bodies, batch);
+        let motion = fresh.then(|| Motion::open(bodies, batch));
+        let motion = motion.as_ref();
         let mut lane_bodies = LaneBodies::open(bodies, batch);
         let batch_points = points_of(batch, points);
         // Points go in pairs (0, 1), (2, 3): a manifold's diagonals (`manifold::reduce`).
@@ -246,16 +252,29 @@ pub fn sweep<B: BodyStore + ?Sized>(
             // short of slipping creeps until the warm start catches up.
             friction(&mut lane_bodies, batch, batch_points);
             for pair in batch_points.chunks_mut(2).rev() {
-                normal_pair(&mut lane_bodies, &motion, batch, pair, h, soft);
+                normal_pair(&mut lane_bodies, motion, batch, pair, h, soft);
             }
             lane_bodies.flush(batch);
             friction(&mut lane_bodies, batch, batch_points);
         } else {
             for pair in batch_points.chunks_mut(2) {
-                normal_pair(&mut lane_bodies, &motion, batch, pair, h, soft);
+                normal_pair(&mut lane_bodies, motion, batch, pair, h, soft);
             }
         }
         lane_bodies.close(bodies, batch);
+    }
+}
+
+/// The gaps of point `p` now: worked out from `motion` and kept, or as last kept.
+#[inline(always)]
+fn gap_now(p: &mut PointRows, motion: Option<&Motion>) -> Reg {
+    match motion {
+        Some(motion) => {
+            let gap = motion.gap(&p.g, &p.gap);
+            p.now = gap.to_array();
+            gap
+        }
+        None => load(&p.now),
     }
 }
 
@@ -263,7 +282,7 @@ pub fn sweep<B: BodyStore + ?Sized>(
 #[inline(always)]
 fn normal_pair(
     lane_bodies: &mut LaneBodies,
-    motion: &Motion,
+    motion: Option<&Motion>,
     batch: &Batch,
     pair: &mut [PointRows],
     h: Scalar,
@@ -272,10 +291,8 @@ fn normal_pair(
     let inv_mass_sum = load(&batch.inv_mass_sum);
     match pair {
         [p, q] => {
-            let (rp, rq) = (
-                NormalRows::new(p, motion.gap(&p.g, &p.gap), batch, h, soft),
-                NormalRows::new(q, motion.gap(&q.g, &q.gap), batch, h, soft),
-            );
+            let (gp, gq) = (gap_now(p, motion), gap_now(q, motion));
+            let (rp, rq) = (NormalRows::new(p, gp, batch, h, soft), NormalRows::new(q, gq, batch, h, soft));
             let (up, uq) = (lane_bodies.normal_speed(&p.g), lane_bodies.normal_speed(&q.g));
             let (new_p, new_q) = block(&rp, &rq, up, uq, (load(&p.coupling), p.inv_det.map(|d| load(&d))));
             let (dp, dq) = (settle(p, new_p), settle(q, new_q));
@@ -283,7 +300,8 @@ fn normal_pair(
             lane_bodies.push_normal(&q.g, inv_mass_sum, dq);
         }
         [p] => {
-            let row = NormalRows::new(p, motion.gap(&p.g, &p.gap), batch, h, soft);
+            let gap = gap_now(p, motion);
+            let row = NormalRows::new(p, gap, batch, h, soft);
             let dp = settle(p, row.single(lane_bodies.normal_speed(&p.g)));
             lane_bodies.push_normal(&p.g, inv_mass_sum, dp);
         }

@@ -144,6 +144,9 @@ pub struct PointRows {
     pub impulse: Lanes,
     /// Gaps when the step began [m].
     pub gap: Lanes,
+    /// Gaps as the substeps have moved the bodies, kept by the last sweep that worked them
+    /// out (`kernel::sweep`) [m].
+    pub now: Lanes,
     /// Relative normal speeds when the step began [m/s].
     pub approach: Lanes,
     /// Largest normal impulse of any substep [N·s].
