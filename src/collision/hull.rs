@@ -9,7 +9,7 @@
 
 use crate::collision::manifold::{Axis, PREFER, Reference};
 use crate::collision::posed::{BOUNDS_SLACK, Posed, in_box};
-use crate::math::{Scalar, Vector};
+use crate::math::{Quat, Scalar, Vector};
 
 pub use crate::collision::gjk::{distance_bound, proved_apart};
 
@@ -134,6 +134,37 @@ pub enum Kind {
 /// visiting only them and their neighbours. Returns `d` and the level: no point of `a` higher
 /// along `d` can be inside `b`.
 pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scratch: &mut Flood) -> (Vector, Scalar) {
+    let key = Some(([a.position, b.position], [a.orientation, b.orientation]));
+    if scratch.below.key != key {
+        flood_below(a, b, hints, scratch);
+        scratch.below.key = key;
+    }
+    let m = &a.mesh;
+    let Flood { features: out, set, below, .. } = scratch;
+    let rows = match kind {
+        Kind::Vertices => {
+            out.clear();
+            out.extend_from_slice(&below.vertices);
+            return (below.d, below.level);
+        }
+        Kind::Triangles => (&m.vertex_triangles, &m.vertex_triangle_start, m.triangles.len()),
+        Kind::Edges => (&m.vertex_all_edges, &m.vertex_all_edge_start, m.edges.len()),
+    };
+    out.clear();
+    if below.vertices.is_empty() {
+        return (below.d, below.level);
+    }
+    set.reset(rows.2);
+    for &v in &below.vertices {
+        set.extend(row(rows.0, rows.1, v));
+    }
+    set.sorted_into(out);
+    (below.d, below.level)
+}
+
+/// The flood of `features_below` into `scratch.below`: the direction, the level and `a`'s
+/// vertices no higher, increasing.
+fn flood_below(a: &Posed, b: &Posed, hints: &Hints, scratch: &mut Flood) {
     let (d, (start, low)) = if is_many_faced(b) {
         let d = centre_line(a, b);
         (d, walk_from(a, d, hints[0]))
@@ -147,10 +178,11 @@ pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scrat
     };
     let level = high_b + BOUNDS_SLACK * b.mesh.radius;
     let m = &a.mesh;
-    let Flood { features: out, seen, set, vertices, stack } = scratch;
-    out.clear();
+    let Flood { seen, stack, below, .. } = scratch;
+    (below.d, below.level) = (d, level);
+    below.vertices.clear();
     if low > level {
-        return (d, level);
+        return;
     }
     seen.reset(m.vertices.len());
     stack.clear();
@@ -164,21 +196,25 @@ pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scrat
             }
         }
     }
-    let rows = match kind {
-        Kind::Vertices => {
-            seen.sorted_into(out);
-            return (d, level);
-        }
-        Kind::Triangles => (&m.vertex_triangles, &m.vertex_triangle_start, m.triangles.len()),
-        Kind::Edges => (&m.vertex_all_edges, &m.vertex_all_edge_start, m.edges.len()),
-    };
-    seen.sorted_into(vertices);
-    set.reset(rows.2);
-    for &v in vertices.iter() {
-        set.extend(row(rows.0, rows.1, v));
+    seen.sorted_into(&mut below.vertices);
+}
+
+/// One way of a pair's flood (`features_below`), kept for the poses it was found at so the
+/// three detection tests of a step flood once: the same poses give the same flood.
+#[derive(Default)]
+pub struct Below {
+    /// A's and B's centres and orientations when found; `None` until then.
+    key: Option<([Vector; 2], [Quat; 2])>,
+    d: Vector,
+    level: Scalar,
+    vertices: Vec<u32>,
+}
+
+impl Below {
+    /// Forgets the flood (keeping the buffer), so the next test floods afresh.
+    pub fn clear(&mut self) {
+        self.key = None;
     }
-    set.sorted_into(out);
-    (d, level)
 }
 
 /// The reused buffers of `features_below`; `features` holds its answer.
@@ -186,9 +222,11 @@ pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scrat
 pub struct Flood {
     /// The features found, increasing.
     pub features: Vec<u32>,
+    /// The flood of the pair and way being tested: a caller that keeps one per pair and way
+    /// swaps it in and out around each test (`Below`).
+    pub below: Below,
     seen: BitSet,
     set: BitSet,
-    vertices: Vec<u32>,
     stack: Vec<u32>,
 }
 
