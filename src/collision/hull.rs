@@ -238,11 +238,6 @@ struct BitSet {
 }
 
 impl BitSet {
-    /// A set for indices below `count`, sized once.
-    fn with_capacity(count: usize) -> Self {
-        Self { words: vec![0; count.div_ceil(64)] }
-    }
-
     /// Empties the set and sizes it for indices below `count`.
     fn reset(&mut self, count: usize) {
         self.words.clear();
@@ -263,10 +258,6 @@ impl BitSet {
         self.words.get(i as usize / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
     }
 
-    fn into_sorted(self, out: &mut Vec<u32>) {
-        self.sorted_into(out);
-    }
-
     fn sorted_into(&self, out: &mut Vec<u32>) {
         out.clear();
         out.reserve(self.words.iter().map(|w| w.count_ones() as usize).sum());
@@ -282,11 +273,23 @@ impl BitSet {
 
 /// The features of one body near the overlap of two: the faces around its vertices in the
 /// region, the feature edges at those also in the tight region, and a vertex to start walks
-/// from. A small mesh gives all its features.
+/// from. A small mesh gives all its features. With its buffers, reused per thread (`NEAR`).
+#[derive(Default)]
 struct Near {
     faces: Vec<u32>,
     edges: Vec<u32>,
     start: u32,
+    seen: BitSet,
+    face_set: BitSet,
+    edge_set: BitSet,
+    stack: Vec<u32>,
+    /// B's edges' arcs on the Gauss map (`best_among`).
+    arcs: Vec<(Vector, Vector)>,
+}
+
+thread_local! {
+    /// `contact_axis_near`'s two `Near`s, one pair a thread: no allocation once sized.
+    static NEAR: std::cell::RefCell<[Near; 2]> = std::cell::RefCell::default();
 }
 
 /// Where the bodies may meet: a box, and a slab across the line of centres `d` (`lo ≤ p·d ≤
@@ -299,42 +302,69 @@ struct Region {
     slab: (Scalar, Scalar),
 }
 
-/// The features of `p` near `region`: flooding from `from` (a vertex in it) over neighbours
-/// that are in it too, then the faces and feature edges at the vertices reached. A contact
-/// patch is one connected piece of a convex surface, so the flood reaches all of it while
-/// visiting only it.
-fn near(p: &Posed, (wide, tight): (&Region, &Region), from: u32) -> Near {
+impl Region {
+    /// True when the region holds every finite point (an unlimited reach).
+    fn is_everywhere(&self) -> bool {
+        let (lo, hi) = self.bounds;
+        lo.cmpeq(Vector::NEG_INFINITY).all()
+            && hi.cmpeq(Vector::INFINITY).all()
+            && self.slab == (Scalar::NEG_INFINITY, Scalar::INFINITY)
+    }
+}
+
+/// The features of `p` near `region`, into `out`: flooding from `from` (a vertex in it) over
+/// neighbours that are in it too, then the faces and feature edges at the vertices reached. A
+/// contact patch is one connected piece of a convex surface, so the flood reaches all of it
+/// while visiting only it.
+fn near(p: &Posed, (wide, tight): (&Region, &Region), from: u32, out: &mut Near) {
     let m = &p.mesh;
+    out.start = from;
+    out.faces.clear();
+    out.edges.clear();
     if !is_many_faced(p) {
-        let faces = (0..m.planes.len() as u32).collect();
-        return Near { faces, edges: (0..m.feature_edges.len() as u32).collect(), start: from };
+        out.faces.extend(0..m.planes.len() as u32);
+        out.edges.extend(0..m.feature_edges.len() as u32);
+        return;
     }
     let within = |region: &Region, i: u32| {
         let v = p.vertices[i as usize];
         let s = v.dot(region.d);
         in_box(v, region.bounds) && s >= region.slab.0 && s <= region.slab.1
     };
-    let mut seen = vec![false; m.vertices.len()];
-    let (mut stack, mut faces, mut edges) =
-        (vec![from], BitSet::with_capacity(m.planes.len()), BitSet::with_capacity(m.feature_edges.len()));
-    seen[from as usize] = true;
+    let Near { faces, edges, seen, face_set, edge_set, stack, .. } = out;
+    edge_set.reset(m.feature_edges.len());
+    if wide.is_everywhere() {
+        // The flood would reach every vertex (the mesh is connected), so every face: the same
+        // lists without the flood.
+        faces.extend(0..m.planes.len() as u32);
+        for i in 0..m.vertices.len() as u32 {
+            if i == from || within(tight, i) {
+                edge_set.extend(row(&m.vertex_edges, &m.vertex_edge_start, i));
+            }
+        }
+        edge_set.sorted_into(edges);
+        return;
+    }
+    seen.reset(m.vertices.len());
+    face_set.reset(m.planes.len());
+    stack.clear();
+    stack.push(from);
+    seen.extend(&[from]);
     while let Some(i) = stack.pop() {
-        faces.extend(row(&m.vertex_faces, &m.vertex_face_start, i));
+        face_set.extend(row(&m.vertex_faces, &m.vertex_face_start, i));
         // The start is the body's point nearest the other: its edges are always tried.
         if i == from || within(tight, i) {
-            edges.extend(row(&m.vertex_edges, &m.vertex_edge_start, i));
+            edge_set.extend(row(&m.vertex_edges, &m.vertex_edge_start, i));
         }
         for &j in row(&m.neighbours, &m.neighbour_start, i) {
-            if !seen[j as usize] && within(wide, j) {
-                seen[j as usize] = true;
+            if !seen.contains(j) && within(wide, j) {
+                seen.extend(&[j]);
                 stack.push(j);
             }
         }
     }
-    let (mut face_list, mut edge_list) = (Vec::new(), Vec::new());
-    faces.into_sorted(&mut face_list);
-    edges.into_sorted(&mut edge_list);
-    Near { faces: face_list, edges: edge_list, start: from }
+    face_set.sorted_into(faces);
+    edge_set.sorted_into(edges);
 }
 
 /// Row `i` of a flat list with start offsets.
@@ -376,7 +406,21 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
         d,
         slab: (low_a.min(high_b) - tight, low_a.max(high_b) + tight),
     };
-    let (na, nb) = (near(a, (&region, &edges_region), from_a), near(b, (&region, &edges_region), from_b));
+    NEAR.with(|cell| {
+        // A nested call (none today) would find the buffers taken: it gets its own.
+        let (mut held, mut fresh) = (cell.try_borrow_mut(), None);
+        let [na, nb] = match held.as_deref_mut() {
+            Ok(buffers) => buffers,
+            Err(_) => fresh.insert(<[Near; 2]>::default()),
+        };
+        near(a, (&region, &edges_region), from_a, na);
+        near(b, (&region, &edges_region), from_b, nb);
+        best_among(a, b, (na, nb), (margin, reach))
+    })
+}
+
+/// `contact_axis_near`'s choice among the features `na` of A and `nb` of B.
+fn best_among(a: &Posed, b: &Posed, (na, nb): (&Near, &mut Near), (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
     let (ea, eb) = (&na.edges, &nb.edges);
     if na.faces.is_empty() || nb.faces.is_empty() {
         return crate::collision::manifold::contact_axis_all(a, b, (margin, reach));
@@ -409,8 +453,12 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
         }
     }
     // B's edges' arcs, turned once for all of A's edges.
-    let arcs_b: Vec<(Vector, Vector)> =
-        eb.iter().map(|&e| b.mesh.feature_edge_faces[e as usize].map(|f| -b.plane(f as usize).normal).into()).collect();
+    let mut arcs_b = std::mem::take(&mut nb.arcs);
+    arcs_b.clear();
+    arcs_b.extend(eb.iter().map(|&e| {
+        let [h, m] = b.mesh.feature_edge_faces[e as usize].map(|f| -b.plane(f as usize).normal);
+        (h, m)
+    }));
     for &ea in ea {
         let ([i, j], [f, g]) = (a.mesh.feature_edges[ea as usize], a.mesh.feature_edge_faces[ea as usize]);
         let (a0, a1) = (a.vertices[i as usize], a.vertices[j as usize]);
@@ -427,6 +475,7 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
             consider(&mut best, n, n.dot(a0 - b0), Reference::Edges, PREFER * margin);
         }
     }
+    nb.arcs = arcs_b;
     best.filter(|x| x.separation <= reach)
 }
 
