@@ -437,19 +437,31 @@ fn best_among(a: &Posed, b: &Posed, (na, nb): (&Near, &mut Near), (margin, reach
                 *best = Some(Axis { normal, separation, reference });
             }
         };
-    let (start_a, start_b) = (a.vertices[na.start as usize], b.vertices[nb.start as usize]);
+    // Each walk starts at the start vertex or the last walk's end, whichever is lower along
+    // the face's normal (faces in a row lie near each other): any vertex bounds the lowest,
+    // so the lower one skips more faces and walks fewer steps, to the same lowest vertex.
+    let pick = |p: &Posed, normal: Vector, (start, last): (u32, u32)| {
+        let (at_start, at_last) = (p.vertices[start as usize].dot(normal), p.vertices[last as usize].dot(normal));
+        if at_last < at_start { (last, at_last) } else { (start, at_start) }
+    };
+    let mut last = na.start;
     for &f in &nb.faces {
         let pl = b.plane(f as usize);
-        if wins(&best, start_a.dot(pl.normal) - pl.offset, 0.0) {
-            let separation = lowest_vertex(a, pl.normal, na.start).1 - pl.offset;
-            consider(&mut best, pl.normal, separation, Reference::FaceOfB(f), 0.0);
+        let (from, bound) = pick(a, pl.normal, (na.start, last));
+        if wins(&best, bound - pl.offset, 0.0) {
+            let (end, lowest) = lowest_vertex(a, pl.normal, from);
+            last = end;
+            consider(&mut best, pl.normal, lowest - pl.offset, Reference::FaceOfB(f), 0.0);
         }
     }
+    let mut last = nb.start;
     for &f in &na.faces {
         let pl = a.plane(f as usize);
-        if wins(&best, start_b.dot(pl.normal) - pl.offset, PREFER * margin) {
-            let separation = lowest_vertex(b, pl.normal, nb.start).1 - pl.offset;
-            consider(&mut best, -pl.normal, separation, Reference::FaceOfA(f), PREFER * margin);
+        let (from, bound) = pick(b, pl.normal, (nb.start, last));
+        if wins(&best, bound - pl.offset, PREFER * margin) {
+            let (end, lowest) = lowest_vertex(b, pl.normal, from);
+            last = end;
+            consider(&mut best, -pl.normal, lowest - pl.offset, Reference::FaceOfA(f), PREFER * margin);
         }
     }
     // B's edges' arcs, turned once for all of A's edges.
