@@ -68,12 +68,12 @@ pub fn beyond_near_face(b: &Posed, points: &[Vector], eps: Scalar, hint: &mut u3
         .any(|pl| points.iter().all(|&p| pl.normal.dot(p) - pl.offset > eps))
 }
 
-/// `lowest_vertex` started from the best of the mesh's seed vertices.
+/// `lowest_vertex` started from the mesh's seed vertex of the cube direction nearest `−dir`
+/// (found by turning `dir` into the body frame, not by trying every seed).
 #[must_use]
 pub fn lowest_vertex_seeded(p: &Posed, dir: Vector) -> (u32, Scalar) {
-    let value = |i: &&u32| p.vertices[**i as usize].dot(dir);
-    let start = p.mesh.seeds.iter().min_by(|i, j| value(i).total_cmp(&value(j))).copied().unwrap_or(0);
-    lowest_vertex(p, dir, start)
+    let k = crate::model::mesh::seed_index(-(p.rotation.transpose() * dir));
+    lowest_vertex(p, dir, p.mesh.seeds.get(k).copied().unwrap_or(0))
 }
 
 /// Where walks over the two bodies of a pair (A, B) start: a vertex of each found by an
