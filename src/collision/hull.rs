@@ -367,6 +367,37 @@ fn near(p: &Posed, (wide, tight): (&Region, &Region), from: u32, out: &mut Near)
     edge_set.sorted_into(edges);
 }
 
+/// The bound of `best_among` on a face of many-faced `q` measured in `q`'s body frame, where
+/// its plane need not be turned: the start vertex and the last walk's end of the other body
+/// taken into that frame, and a slack far above the round-off between the two frames, so a
+/// face this bound rules out is one the exact bound rules out too.
+struct Rough {
+    points: [Vector; 2],
+    slack: Scalar,
+}
+
+impl Rough {
+    /// For the faces of `q` against world points `[start, last]`; `None` for a small mesh,
+    /// whose world planes are at hand.
+    fn of(q: &Posed, [start, last]: [Vector; 2]) -> Option<Self> {
+        let slack = 1e-9 * (1.0 + q.position.length() + q.mesh.radius + start.length().max(last.length()));
+        let to_body = |p: Vector| q.rotation.transpose() * (p - q.position);
+        is_many_faced(q).then(|| Self { points: [to_body(start), to_body(last)], slack })
+    }
+
+    /// Replaces the last walk's end, and widens the slack for it if need be.
+    fn set_last(&mut self, q: &Posed, last: Vector) {
+        self.points[1] = q.rotation.transpose() * (last - q.position);
+        self.slack = self.slack.max(1e-9 * (1.0 + q.position.length() + q.mesh.radius + last.length()));
+    }
+
+    /// At least the exact bound on face `f` (the lower point's height above its plane).
+    fn bound(&self, q: &Posed, f: u32) -> Scalar {
+        let pl = &q.mesh.planes[f as usize];
+        self.points[0].dot(pl.normal).min(self.points[1].dot(pl.normal)) - pl.offset + self.slack
+    }
+}
+
 /// Row `i` of a flat list with start offsets.
 fn row<'a>(flat: &'a [u32], start: &[u32], i: u32) -> &'a [u32] {
     &flat[start[i as usize] as usize..start[i as usize + 1] as usize]
@@ -445,22 +476,36 @@ fn best_among(a: &Posed, b: &Posed, (na, nb): (&Near, &mut Near), (margin, reach
         if at_last < at_start { (last, at_last) } else { (start, at_start) }
     };
     let mut last = na.start;
+    let mut rough = Rough::of(b, [a.vertices[na.start as usize]; 2]);
     for &f in &nb.faces {
+        if rough.as_ref().is_some_and(|r| !wins(&best, r.bound(b, f), 0.0)) {
+            continue;
+        }
         let pl = b.plane(f as usize);
         let (from, bound) = pick(a, pl.normal, (na.start, last));
         if wins(&best, bound - pl.offset, 0.0) {
             let (end, lowest) = lowest_vertex(a, pl.normal, from);
             last = end;
+            if let Some(r) = rough.as_mut() {
+                r.set_last(b, a.vertices[end as usize]);
+            }
             consider(&mut best, pl.normal, lowest - pl.offset, Reference::FaceOfB(f), 0.0);
         }
     }
     let mut last = nb.start;
+    let mut rough = Rough::of(a, [b.vertices[nb.start as usize]; 2]);
     for &f in &na.faces {
+        if rough.as_ref().is_some_and(|r| !wins(&best, r.bound(a, f), PREFER * margin)) {
+            continue;
+        }
         let pl = a.plane(f as usize);
         let (from, bound) = pick(b, pl.normal, (nb.start, last));
         if wins(&best, bound - pl.offset, PREFER * margin) {
             let (end, lowest) = lowest_vertex(b, pl.normal, from);
             last = end;
+            if let Some(r) = rough.as_mut() {
+                r.set_last(a, b.vertices[end as usize]);
+            }
             consider(&mut best, -pl.normal, lowest - pl.offset, Reference::FaceOfA(f), PREFER * margin);
         }
     }
@@ -574,5 +619,57 @@ mod tests {
             }
         }
         assert!(proved > 1000, "most points outside are proved so: {proved}");
+    }
+
+    #[test]
+    fn a_seeded_walk_finds_the_lowest_vertex_and_the_seeds_follow_their_directions() {
+        let mesh = ball(3);
+        let mut directions = Vec::new();
+        for x in [-1.0, 0.0, 1.0] {
+            for y in [-1.0, 0.0, 1.0] {
+                directions
+                    .extend([-1.0, 0.0, 1.0].map(|z| Vector::new(x, y, z)).into_iter().filter(|d| *d != Vector::ZERO));
+            }
+        }
+        assert_eq!(mesh.seeds.len(), 26);
+        for (k, (&seed, &d)) in mesh.seeds.iter().zip(&directions).enumerate() {
+            // Seed k is farthest along its cube direction, which seed_index maps back to k.
+            assert_eq!(crate::model::mesh::seed_index(d), k, "{d}");
+            let top = mesh.vertices.iter().map(|v| v.dot(d)).fold(Scalar::NEG_INFINITY, Scalar::max);
+            assert_eq!(mesh.vertices[seed as usize].dot(d), top, "{d}");
+        }
+        let mut rng = SplitMix64::new(5);
+        for _ in 0..500 {
+            let p = Posed::new(
+                mesh.clone(),
+                &Pose { position: Vector::new(3.0, -1.0, 2.0), orientation: random_turn(&mut rng) },
+            );
+            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5);
+            let lowest = p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
+            assert_eq!(lowest_vertex_seeded(&p, dir).1, lowest);
+        }
+    }
+
+    #[test]
+    fn an_unlimited_reach_gives_the_axis_of_a_reach_that_covers_both_bodies() {
+        // Unlimited, every face is taken without a flood; a reach of a kilometre floods every
+        // vertex of both. The same faces and edges, so the same axis to the bit.
+        let (small, box_mesh) = (ball(2), Arc::new(ConvexMesh::cuboid(Vector::new(3.0, 1.0, 3.0))));
+        let mut rng = SplitMix64::new(13);
+        for case in 0..200 {
+            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.2, rng.unit() - 0.5).normalize();
+            let other = if case % 2 == 0 { small.clone() } else { box_mesh.clone() };
+            let a = Posed::new(
+                small.clone(),
+                &Pose { position: dir * (1.0 + 2.0 * rng.unit()), orientation: random_turn(&mut rng) },
+            );
+            let b = Posed::new(other, &Pose { position: Vector::ZERO, orientation: random_turn(&mut rng) });
+            let unlimited = contact_axis_near(&a, &b, (0.0, Scalar::INFINITY));
+            assert_eq!(unlimited, contact_axis_near(&a, &b, (0.0, 1e3)), "case {case}");
+            let axis = unlimited.expect("an axis");
+            let lowest = |p: &Posed, d: Vector| p.vertices.iter().map(|v| v.dot(d)).fold(Scalar::INFINITY, Scalar::min);
+            let gap = lowest(&a, axis.normal) + lowest(&b, -axis.normal);
+            assert!((gap - axis.separation).abs() < 1e-12, "case {case}: {axis:?} really {gap}");
+        }
     }
 }
