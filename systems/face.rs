@@ -2,7 +2,9 @@
 //! (docs/physics.md §1.3, errata E2 and E3).
 
 use crate::collision::contact::{Contact, Feature, PairState};
-use crate::collision::hull::{Flood, Hints, Kind, centre_walks, features_below, is_many_faced, outside_near_face};
+use crate::collision::hull::{
+    Below, Flood, Hints, Kind, centre_walks, features_below, is_many_faced, outside_near_face,
+};
 use crate::collision::posed::{Posed, depth_along_from, is_inside};
 use crate::math::{Scalar, Vector};
 use crate::sim::context::StepContext;
@@ -31,11 +33,24 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
     let mut walks = std::mem::take(ctx.scratch.get_mut::<CentreWalks>());
     walks.update(ctx);
     let posed = &ctx.posed;
-    let rows = ctx.pairs.par_iter_mut().zip(walks.hints.par_iter()).filter(|(p, _)| p.is_candidate());
-    rows.for_each_init(Flood::default, |flood, (pair, w)| {
+    let rows = ctx.pairs.par_iter_mut().zip(walks.hints.par_iter().zip(walks.floods.par_iter_mut()));
+    rows.filter(|(p, _)| p.is_candidate()).for_each_init(Flood::default, |flood, (pair, (w, floods))| {
         let (a, b) = (posed.get(pair.a), posed.get(pair.b));
-        let [ha, hb] = if w.0 == (pair.a, pair.b) { w.1 } else { centre_walks(a, b) };
-        let contact = kernel(a, b, [ha, hb], flood).or_else(|| kernel(b, a, [hb, ha], flood).map(Contact::flipped));
+        let shared = w.0 == (pair.a, pair.b);
+        let [ha, hb] = if shared { w.1 } else { centre_walks(a, b) };
+        // Each way's flood is kept for the pair's next test (`Below`), or forgotten.
+        let mut test = |(x, y): (&Posed, &Posed), hints: Hints, way: usize| {
+            match shared {
+                true => std::mem::swap(&mut flood.below, &mut floods[way]),
+                false => flood.below.clear(),
+            }
+            let contact = kernel(x, y, hints, flood);
+            if shared {
+                std::mem::swap(&mut flood.below, &mut floods[way]);
+            }
+            contact
+        };
+        let contact = test((a, b), [ha, hb], 0).or_else(|| test((b, a), [hb, ha], 1).map(Contact::flipped));
         if let Some(contact) = contact {
             pair.state = PairState::Found(contact);
         }
@@ -48,13 +63,15 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
 }
 
 /// Each candidate pair's `centre_walks`, found by the first detection test of a step and
-/// shared by the others (the bodies do not move between them). Each entry names its pair; one
-/// that does not match is found afresh, so a schedule that changes the pairs between the tests
-/// only loses the sharing.
+/// shared by the others (the bodies do not move between them), and each pair's floods both
+/// ways (`Below`), kept by the first test that floods and reused for the same poses. Each
+/// entry names its pair; one that does not match is found afresh, so a schedule that changes
+/// the pairs between the tests only loses the sharing.
 #[derive(Default)]
 struct CentreWalks {
     step: u64,
     hints: Vec<((u32, u32), Hints)>,
+    floods: Vec<[Below; 2]>,
 }
 
 impl CentreWalks {
@@ -70,6 +87,9 @@ impl CentreWalks {
             false => ((u32::MAX, u32::MAX), [None; 2]),
         };
         ctx.pairs.par_iter().map(walk).collect_into_vec(&mut self.hints);
+        // The buffers stay, for the next step's floods.
+        self.floods.resize_with(ctx.pairs.len(), Default::default);
+        self.floods.iter_mut().flatten().for_each(Below::clear);
     }
 }
 

@@ -61,7 +61,8 @@ fn vertex_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) ->
     if count == 0 {
         return None;
     }
-    let normal = b.closest_face_normal_from(deepest.1, a, hints);
+    // `deepest.0` is the deepest vertex's largest plane distance, found above.
+    let normal = b.closest_face_normal_given(deepest.1, deepest.0, a, hints);
     Some(Contact {
         point: sum / Scalar::from(count),
         normal,

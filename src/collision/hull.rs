@@ -9,7 +9,7 @@
 
 use crate::collision::manifold::{Axis, PREFER, Reference};
 use crate::collision::posed::{BOUNDS_SLACK, Posed, in_box};
-use crate::math::{Scalar, Vector};
+use crate::math::{Quat, Scalar, Vector};
 
 pub use crate::collision::gjk::{distance_bound, proved_apart};
 
@@ -68,12 +68,12 @@ pub fn beyond_near_face(b: &Posed, points: &[Vector], eps: Scalar, hint: &mut u3
         .any(|pl| points.iter().all(|&p| pl.normal.dot(p) - pl.offset > eps))
 }
 
-/// `lowest_vertex` started from the best of the mesh's seed vertices.
+/// `lowest_vertex` started from the mesh's seed vertex of the cube direction nearest `−dir`
+/// (found by turning `dir` into the body frame, not by trying every seed).
 #[must_use]
 pub fn lowest_vertex_seeded(p: &Posed, dir: Vector) -> (u32, Scalar) {
-    let value = |i: &&u32| p.vertices[**i as usize].dot(dir);
-    let start = p.mesh.seeds.iter().min_by(|i, j| value(i).total_cmp(&value(j))).copied().unwrap_or(0);
-    lowest_vertex(p, dir, start)
+    let k = crate::model::mesh::seed_index(-(p.rotation.transpose() * dir));
+    lowest_vertex(p, dir, p.mesh.seeds.get(k).copied().unwrap_or(0))
 }
 
 /// Where walks over the two bodies of a pair (A, B) start: a vertex of each found by an
@@ -134,6 +134,37 @@ pub enum Kind {
 /// visiting only them and their neighbours. Returns `d` and the level: no point of `a` higher
 /// along `d` can be inside `b`.
 pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scratch: &mut Flood) -> (Vector, Scalar) {
+    let key = Some(([a.position, b.position], [a.orientation, b.orientation]));
+    if scratch.below.key != key {
+        flood_below(a, b, hints, scratch);
+        scratch.below.key = key;
+    }
+    let m = &a.mesh;
+    let Flood { features: out, set, below, .. } = scratch;
+    let rows = match kind {
+        Kind::Vertices => {
+            out.clear();
+            out.extend_from_slice(&below.vertices);
+            return (below.d, below.level);
+        }
+        Kind::Triangles => (&m.vertex_triangles, &m.vertex_triangle_start, m.triangles.len()),
+        Kind::Edges => (&m.vertex_all_edges, &m.vertex_all_edge_start, m.edges.len()),
+    };
+    out.clear();
+    if below.vertices.is_empty() {
+        return (below.d, below.level);
+    }
+    set.reset(rows.2);
+    for &v in &below.vertices {
+        set.extend(row(rows.0, rows.1, v));
+    }
+    set.sorted_into(out);
+    (below.d, below.level)
+}
+
+/// The flood of `features_below` into `scratch.below`: the direction, the level and `a`'s
+/// vertices no higher, increasing.
+fn flood_below(a: &Posed, b: &Posed, hints: &Hints, scratch: &mut Flood) {
     let (d, (start, low)) = if is_many_faced(b) {
         let d = centre_line(a, b);
         (d, walk_from(a, d, hints[0]))
@@ -147,10 +178,11 @@ pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scrat
     };
     let level = high_b + BOUNDS_SLACK * b.mesh.radius;
     let m = &a.mesh;
-    let Flood { features: out, seen, set, vertices, stack } = scratch;
-    out.clear();
+    let Flood { seen, stack, below, .. } = scratch;
+    (below.d, below.level) = (d, level);
+    below.vertices.clear();
     if low > level {
-        return (d, level);
+        return;
     }
     seen.reset(m.vertices.len());
     stack.clear();
@@ -164,21 +196,25 @@ pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scrat
             }
         }
     }
-    let rows = match kind {
-        Kind::Vertices => {
-            seen.sorted_into(out);
-            return (d, level);
-        }
-        Kind::Triangles => (&m.vertex_triangles, &m.vertex_triangle_start, m.triangles.len()),
-        Kind::Edges => (&m.vertex_all_edges, &m.vertex_all_edge_start, m.edges.len()),
-    };
-    seen.sorted_into(vertices);
-    set.reset(rows.2);
-    for &v in vertices.iter() {
-        set.extend(row(rows.0, rows.1, v));
+    seen.sorted_into(&mut below.vertices);
+}
+
+/// One way of a pair's flood (`features_below`), kept for the poses it was found at so the
+/// three detection tests of a step flood once: the same poses give the same flood.
+#[derive(Default)]
+pub struct Below {
+    /// A's and B's centres and orientations when found; `None` until then.
+    key: Option<([Vector; 2], [Quat; 2])>,
+    d: Vector,
+    level: Scalar,
+    vertices: Vec<u32>,
+}
+
+impl Below {
+    /// Forgets the flood (keeping the buffer), so the next test floods afresh.
+    pub fn clear(&mut self) {
+        self.key = None;
     }
-    set.sorted_into(out);
-    (d, level)
 }
 
 /// The reused buffers of `features_below`; `features` holds its answer.
@@ -186,9 +222,11 @@ pub fn features_below(a: &Posed, b: &Posed, (kind, hints): (Kind, &Hints), scrat
 pub struct Flood {
     /// The features found, increasing.
     pub features: Vec<u32>,
+    /// The flood of the pair and way being tested: a caller that keeps one per pair and way
+    /// swaps it in and out around each test (`Below`).
+    pub below: Below,
     seen: BitSet,
     set: BitSet,
-    vertices: Vec<u32>,
     stack: Vec<u32>,
 }
 
@@ -200,11 +238,6 @@ struct BitSet {
 }
 
 impl BitSet {
-    /// A set for indices below `count`, sized once.
-    fn with_capacity(count: usize) -> Self {
-        Self { words: vec![0; count.div_ceil(64)] }
-    }
-
     /// Empties the set and sizes it for indices below `count`.
     fn reset(&mut self, count: usize) {
         self.words.clear();
@@ -225,10 +258,6 @@ impl BitSet {
         self.words.get(i as usize / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
     }
 
-    fn into_sorted(self, out: &mut Vec<u32>) {
-        self.sorted_into(out);
-    }
-
     fn sorted_into(&self, out: &mut Vec<u32>) {
         out.clear();
         out.reserve(self.words.iter().map(|w| w.count_ones() as usize).sum());
@@ -244,11 +273,23 @@ impl BitSet {
 
 /// The features of one body near the overlap of two: the faces around its vertices in the
 /// region, the feature edges at those also in the tight region, and a vertex to start walks
-/// from. A small mesh gives all its features.
+/// from. A small mesh gives all its features. With its buffers, reused per thread (`NEAR`).
+#[derive(Default)]
 struct Near {
     faces: Vec<u32>,
     edges: Vec<u32>,
     start: u32,
+    seen: BitSet,
+    face_set: BitSet,
+    edge_set: BitSet,
+    stack: Vec<u32>,
+    /// B's edges' arcs on the Gauss map (`best_among`).
+    arcs: Vec<(Vector, Vector)>,
+}
+
+thread_local! {
+    /// `contact_axis_near`'s two `Near`s, one pair a thread: no allocation once sized.
+    static NEAR: std::cell::RefCell<[Near; 2]> = std::cell::RefCell::default();
 }
 
 /// Where the bodies may meet: a box, and a slab across the line of centres `d` (`lo ≤ p·d ≤
@@ -261,42 +302,100 @@ struct Region {
     slab: (Scalar, Scalar),
 }
 
-/// The features of `p` near `region`: flooding from `from` (a vertex in it) over neighbours
-/// that are in it too, then the faces and feature edges at the vertices reached. A contact
-/// patch is one connected piece of a convex surface, so the flood reaches all of it while
-/// visiting only it.
-fn near(p: &Posed, (wide, tight): (&Region, &Region), from: u32) -> Near {
+impl Region {
+    /// True when the region holds every finite point (an unlimited reach).
+    fn is_everywhere(&self) -> bool {
+        let (lo, hi) = self.bounds;
+        lo.cmpeq(Vector::NEG_INFINITY).all()
+            && hi.cmpeq(Vector::INFINITY).all()
+            && self.slab == (Scalar::NEG_INFINITY, Scalar::INFINITY)
+    }
+}
+
+/// The features of `p` near `region`, into `out`: flooding from `from` (a vertex in it) over
+/// neighbours that are in it too, then the faces and feature edges at the vertices reached. A
+/// contact patch is one connected piece of a convex surface, so the flood reaches all of it
+/// while visiting only it.
+fn near(p: &Posed, (wide, tight): (&Region, &Region), from: u32, out: &mut Near) {
     let m = &p.mesh;
+    out.start = from;
+    out.faces.clear();
+    out.edges.clear();
     if !is_many_faced(p) {
-        let faces = (0..m.planes.len() as u32).collect();
-        return Near { faces, edges: (0..m.feature_edges.len() as u32).collect(), start: from };
+        out.faces.extend(0..m.planes.len() as u32);
+        out.edges.extend(0..m.feature_edges.len() as u32);
+        return;
     }
     let within = |region: &Region, i: u32| {
         let v = p.vertices[i as usize];
         let s = v.dot(region.d);
         in_box(v, region.bounds) && s >= region.slab.0 && s <= region.slab.1
     };
-    let mut seen = vec![false; m.vertices.len()];
-    let (mut stack, mut faces, mut edges) =
-        (vec![from], BitSet::with_capacity(m.planes.len()), BitSet::with_capacity(m.feature_edges.len()));
-    seen[from as usize] = true;
+    let Near { faces, edges, seen, face_set, edge_set, stack, .. } = out;
+    edge_set.reset(m.feature_edges.len());
+    if wide.is_everywhere() {
+        // The flood would reach every vertex (the mesh is connected), so every face: the same
+        // lists without the flood.
+        faces.extend(0..m.planes.len() as u32);
+        for i in 0..m.vertices.len() as u32 {
+            if i == from || within(tight, i) {
+                edge_set.extend(row(&m.vertex_edges, &m.vertex_edge_start, i));
+            }
+        }
+        edge_set.sorted_into(edges);
+        return;
+    }
+    seen.reset(m.vertices.len());
+    face_set.reset(m.planes.len());
+    stack.clear();
+    stack.push(from);
+    seen.extend(&[from]);
     while let Some(i) = stack.pop() {
-        faces.extend(row(&m.vertex_faces, &m.vertex_face_start, i));
+        face_set.extend(row(&m.vertex_faces, &m.vertex_face_start, i));
         // The start is the body's point nearest the other: its edges are always tried.
         if i == from || within(tight, i) {
-            edges.extend(row(&m.vertex_edges, &m.vertex_edge_start, i));
+            edge_set.extend(row(&m.vertex_edges, &m.vertex_edge_start, i));
         }
         for &j in row(&m.neighbours, &m.neighbour_start, i) {
-            if !seen[j as usize] && within(wide, j) {
-                seen[j as usize] = true;
+            if !seen.contains(j) && within(wide, j) {
+                seen.extend(&[j]);
                 stack.push(j);
             }
         }
     }
-    let (mut face_list, mut edge_list) = (Vec::new(), Vec::new());
-    faces.into_sorted(&mut face_list);
-    edges.into_sorted(&mut edge_list);
-    Near { faces: face_list, edges: edge_list, start: from }
+    face_set.sorted_into(faces);
+    edge_set.sorted_into(edges);
+}
+
+/// The bound of `best_among` on a face of many-faced `q` measured in `q`'s body frame, where
+/// its plane need not be turned: the start vertex and the last walk's end of the other body
+/// taken into that frame, and a slack far above the round-off between the two frames, so a
+/// face this bound rules out is one the exact bound rules out too.
+struct Rough {
+    points: [Vector; 2],
+    slack: Scalar,
+}
+
+impl Rough {
+    /// For the faces of `q` against world points `[start, last]`; `None` for a small mesh,
+    /// whose world planes are at hand.
+    fn of(q: &Posed, [start, last]: [Vector; 2]) -> Option<Self> {
+        let slack = 1e-9 * (1.0 + q.position.length() + q.mesh.radius + start.length().max(last.length()));
+        let to_body = |p: Vector| q.rotation.transpose() * (p - q.position);
+        is_many_faced(q).then(|| Self { points: [to_body(start), to_body(last)], slack })
+    }
+
+    /// Replaces the last walk's end, and widens the slack for it if need be.
+    fn set_last(&mut self, q: &Posed, last: Vector) {
+        self.points[1] = q.rotation.transpose() * (last - q.position);
+        self.slack = self.slack.max(1e-9 * (1.0 + q.position.length() + q.mesh.radius + last.length()));
+    }
+
+    /// At least the exact bound on face `f` (the lower point's height above its plane).
+    fn bound(&self, q: &Posed, f: u32) -> Scalar {
+        let pl = &q.mesh.planes[f as usize];
+        self.points[0].dot(pl.normal).min(self.points[1].dot(pl.normal)) - pl.offset + self.slack
+    }
 }
 
 /// Row `i` of a flat list with start offsets.
@@ -338,7 +437,21 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
         d,
         slab: (low_a.min(high_b) - tight, low_a.max(high_b) + tight),
     };
-    let (na, nb) = (near(a, (&region, &edges_region), from_a), near(b, (&region, &edges_region), from_b));
+    NEAR.with(|cell| {
+        // A nested call (none today) would find the buffers taken: it gets its own.
+        let (mut held, mut fresh) = (cell.try_borrow_mut(), None);
+        let [na, nb] = match held.as_deref_mut() {
+            Ok(buffers) => buffers,
+            Err(_) => fresh.insert(<[Near; 2]>::default()),
+        };
+        near(a, (&region, &edges_region), from_a, na);
+        near(b, (&region, &edges_region), from_b, nb);
+        best_among(a, b, (na, nb), (margin, reach))
+    })
+}
+
+/// `contact_axis_near`'s choice among the features `na` of A and `nb` of B.
+fn best_among(a: &Posed, b: &Posed, (na, nb): (&Near, &mut Near), (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
     let (ea, eb) = (&na.edges, &nb.edges);
     if na.faces.is_empty() || nb.faces.is_empty() {
         return crate::collision::manifold::contact_axis_all(a, b, (margin, reach));
@@ -355,24 +468,54 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
                 *best = Some(Axis { normal, separation, reference });
             }
         };
-    let (start_a, start_b) = (a.vertices[na.start as usize], b.vertices[nb.start as usize]);
+    // Each walk starts at the start vertex or the last walk's end, whichever is lower along
+    // the face's normal (faces in a row lie near each other): any vertex bounds the lowest,
+    // so the lower one skips more faces and walks fewer steps, to the same lowest vertex.
+    let pick = |p: &Posed, normal: Vector, (start, last): (u32, u32)| {
+        let (at_start, at_last) = (p.vertices[start as usize].dot(normal), p.vertices[last as usize].dot(normal));
+        if at_last < at_start { (last, at_last) } else { (start, at_start) }
+    };
+    let mut last = na.start;
+    let mut rough = Rough::of(b, [a.vertices[na.start as usize]; 2]);
     for &f in &nb.faces {
+        if rough.as_ref().is_some_and(|r| !wins(&best, r.bound(b, f), 0.0)) {
+            continue;
+        }
         let pl = b.plane(f as usize);
-        if wins(&best, start_a.dot(pl.normal) - pl.offset, 0.0) {
-            let separation = lowest_vertex(a, pl.normal, na.start).1 - pl.offset;
-            consider(&mut best, pl.normal, separation, Reference::FaceOfB(f), 0.0);
+        let (from, bound) = pick(a, pl.normal, (na.start, last));
+        if wins(&best, bound - pl.offset, 0.0) {
+            let (end, lowest) = lowest_vertex(a, pl.normal, from);
+            last = end;
+            if let Some(r) = rough.as_mut() {
+                r.set_last(b, a.vertices[end as usize]);
+            }
+            consider(&mut best, pl.normal, lowest - pl.offset, Reference::FaceOfB(f), 0.0);
         }
     }
+    let mut last = nb.start;
+    let mut rough = Rough::of(a, [b.vertices[nb.start as usize]; 2]);
     for &f in &na.faces {
+        if rough.as_ref().is_some_and(|r| !wins(&best, r.bound(a, f), PREFER * margin)) {
+            continue;
+        }
         let pl = a.plane(f as usize);
-        if wins(&best, start_b.dot(pl.normal) - pl.offset, PREFER * margin) {
-            let separation = lowest_vertex(b, pl.normal, nb.start).1 - pl.offset;
-            consider(&mut best, -pl.normal, separation, Reference::FaceOfA(f), PREFER * margin);
+        let (from, bound) = pick(b, pl.normal, (nb.start, last));
+        if wins(&best, bound - pl.offset, PREFER * margin) {
+            let (end, lowest) = lowest_vertex(b, pl.normal, from);
+            last = end;
+            if let Some(r) = rough.as_mut() {
+                r.set_last(a, b.vertices[end as usize]);
+            }
+            consider(&mut best, -pl.normal, lowest - pl.offset, Reference::FaceOfA(f), PREFER * margin);
         }
     }
     // B's edges' arcs, turned once for all of A's edges.
-    let arcs_b: Vec<(Vector, Vector)> =
-        eb.iter().map(|&e| b.mesh.feature_edge_faces[e as usize].map(|f| -b.plane(f as usize).normal).into()).collect();
+    let mut arcs_b = std::mem::take(&mut nb.arcs);
+    arcs_b.clear();
+    arcs_b.extend(eb.iter().map(|&e| {
+        let [h, m] = b.mesh.feature_edge_faces[e as usize].map(|f| -b.plane(f as usize).normal);
+        (h, m)
+    }));
     for &ea in ea {
         let ([i, j], [f, g]) = (a.mesh.feature_edges[ea as usize], a.mesh.feature_edge_faces[ea as usize]);
         let (a0, a1) = (a.vertices[i as usize], a.vertices[j as usize]);
@@ -389,6 +532,7 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
             consider(&mut best, n, n.dot(a0 - b0), Reference::Edges, PREFER * margin);
         }
     }
+    nb.arcs = arcs_b;
     best.filter(|x| x.separation <= reach)
 }
 
@@ -475,5 +619,57 @@ mod tests {
             }
         }
         assert!(proved > 1000, "most points outside are proved so: {proved}");
+    }
+
+    #[test]
+    fn a_seeded_walk_finds_the_lowest_vertex_and_the_seeds_follow_their_directions() {
+        let mesh = ball(3);
+        let mut directions = Vec::new();
+        for x in [-1.0, 0.0, 1.0] {
+            for y in [-1.0, 0.0, 1.0] {
+                directions
+                    .extend([-1.0, 0.0, 1.0].map(|z| Vector::new(x, y, z)).into_iter().filter(|d| *d != Vector::ZERO));
+            }
+        }
+        assert_eq!(mesh.seeds.len(), 26);
+        for (k, (&seed, &d)) in mesh.seeds.iter().zip(&directions).enumerate() {
+            // Seed k is farthest along its cube direction, which seed_index maps back to k.
+            assert_eq!(crate::model::mesh::seed_index(d), k, "{d}");
+            let top = mesh.vertices.iter().map(|v| v.dot(d)).fold(Scalar::NEG_INFINITY, Scalar::max);
+            assert_eq!(mesh.vertices[seed as usize].dot(d), top, "{d}");
+        }
+        let mut rng = SplitMix64::new(5);
+        for _ in 0..500 {
+            let p = Posed::new(
+                mesh.clone(),
+                &Pose { position: Vector::new(3.0, -1.0, 2.0), orientation: random_turn(&mut rng) },
+            );
+            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5);
+            let lowest = p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
+            assert_eq!(lowest_vertex_seeded(&p, dir).1, lowest);
+        }
+    }
+
+    #[test]
+    fn an_unlimited_reach_gives_the_axis_of_a_reach_that_covers_both_bodies() {
+        // Unlimited, every face is taken without a flood; a reach of a kilometre floods every
+        // vertex of both. The same faces and edges, so the same axis to the bit.
+        let (small, box_mesh) = (ball(2), Arc::new(ConvexMesh::cuboid(Vector::new(3.0, 1.0, 3.0))));
+        let mut rng = SplitMix64::new(13);
+        for case in 0..200 {
+            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.2, rng.unit() - 0.5).normalize();
+            let other = if case % 2 == 0 { small.clone() } else { box_mesh.clone() };
+            let a = Posed::new(
+                small.clone(),
+                &Pose { position: dir * (1.0 + 2.0 * rng.unit()), orientation: random_turn(&mut rng) },
+            );
+            let b = Posed::new(other, &Pose { position: Vector::ZERO, orientation: random_turn(&mut rng) });
+            let unlimited = contact_axis_near(&a, &b, (0.0, Scalar::INFINITY));
+            assert_eq!(unlimited, contact_axis_near(&a, &b, (0.0, 1e3)), "case {case}");
+            let axis = unlimited.expect("an axis");
+            let lowest = |p: &Posed, d: Vector| p.vertices.iter().map(|v| v.dot(d)).fold(Scalar::INFINITY, Scalar::min);
+            let gap = lowest(&a, axis.normal) + lowest(&b, -axis.normal);
+            assert!((gap - axis.separation).abs() < 1e-12, "case {case}: {axis:?} really {gap}");
+        }
     }
 }

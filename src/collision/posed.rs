@@ -202,7 +202,12 @@ impl Posed {
     /// `closest_face_normal` with walks over `other` and this body starting at `hints`.
     #[must_use]
     pub fn closest_face_normal_from(&self, p: Vector, other: &Self, hints: [Option<u32>; 2]) -> Vector {
-        let best = self.max_plane_distance(p);
+        self.closest_face_normal_given(p, self.max_plane_distance(p), other, hints)
+    }
+
+    /// `closest_face_normal_from` for a caller that has `best = self.max_plane_distance(p)`.
+    #[must_use]
+    pub fn closest_face_normal_given(&self, p: Vector, best: Scalar, other: &Self, hints: [Option<u32>; 2]) -> Vector {
         let tie = FACE_TIE_TOLERANCE * self.mesh.radius;
         let toward = other.position - self.position;
         let mut chosen = (Scalar::INFINITY, Scalar::NEG_INFINITY, Vector::ZERO);

@@ -95,9 +95,9 @@ pub struct ConvexMesh {
     /// The face planes grouped by normal, each group with a bound (empty unless many-faced):
     /// plane scans skip the groups that cannot matter.
     pub plane_groups: Vec<crate::model::clusters::PlaneGroup>,
-    /// The vertices farthest along each of 26 directions (the faces, edges and corners of a
-    /// cube), each once: a walk for the vertex lowest along any direction starts at the best
-    /// of them and has only a few steps left.
+    /// The vertex farthest along each of the 26 directions (the faces, edges and corners of a
+    /// cube), in the order of `seed_index`: a walk for the vertex lowest along any direction
+    /// starts at the one of the nearest direction and has only a few steps left.
     pub seeds: Vec<u32>,
 }
 
@@ -437,7 +437,8 @@ fn feature_edges(vertices: &[Vector], triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>,
     (edges, dirs)
 }
 
-/// The vertex farthest along each of the 26 directions with components in {−1, 0, 1}.
+/// The vertex farthest along each of the 26 directions with components in {−1, 0, 1}, x
+/// slowest, z fastest.
 fn seeds(vertices: &[Vector]) -> Vec<u32> {
     let mut out: Vec<u32> = Vec::new();
     for x in -1..=1 {
@@ -448,13 +449,24 @@ fn seeds(vertices: &[Vector]) -> Vec<u32> {
                     continue;
                 }
                 let best = (0..vertices.len()).max_by(|&i, &j| vertices[i].dot(d).total_cmp(&vertices[j].dot(d)));
-                if let Some(i) = best.map(|i| i as u32).filter(|i| !out.contains(i)) {
-                    out.push(i);
-                }
+                out.extend(best.map(|i| i as u32));
             }
         }
     }
     out
+}
+
+/// Where the seed of the cube direction nearest `d` (body frame) is in `ConvexMesh::seeds`:
+/// each component kept, as its sign, when above 0.414 (tan 22.5°) of the largest.
+#[must_use]
+pub fn seed_index(d: Vector) -> usize {
+    let big = 0.414 * d.abs().max_element();
+    let digit = |x: Scalar| usize::from(x >= -big) + usize::from(x > big);
+    match digit(d.x) * 9 + digit(d.y) * 3 + digit(d.z) {
+        13 => 0, // no direction (a zero or NaN `d`): any seed
+        k if k > 13 => k - 1,
+        k => k,
+    }
 }
 
 /// `(vertex, item)` pairs as each vertex's sorted, distinct items in one flat list with start
