@@ -5,7 +5,7 @@
 //! `cargo test --test studio_browser -- --ignored`.
 
 mod common;
-use common::studio::{PAGE_TEST_IDS, Studio, get, start};
+use common::studio::{CHROMIUM_FLAGS, PAGE_TEST_IDS, Studio, get, start};
 use serde_json::Value;
 use std::process::{Command, Stdio};
 
@@ -34,16 +34,8 @@ fn chromium(url: &str, mode: &str, budget_ms: u32) -> String {
     let out = Command::new("timeout")
         .arg("90")
         .arg(binary)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--use-gl=swiftshader",
-            "--enable-unsafe-swiftshader",
-            "--no-first-run",
-            "--hide-scrollbars",
-            "--window-size=800,600",
-        ])
+        .args(CHROMIUM_FLAGS)
+        .args(["--window-size=800,600"])
         .arg(format!("--user-data-dir={}", profile.path().display()))
         .arg(format!("--virtual-time-budget={budget_ms}"))
         .arg(mode)

@@ -5,7 +5,7 @@
 //! 4 000 bodies"). `CHROMIUM` names another browser binary; `STUDIO_FPS_SCENE` another scene.
 
 mod common;
-use common::studio::{Studio, get, request, start};
+use common::studio::{CHROMIUM_FLAGS, Studio, get, request, start};
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -33,18 +33,8 @@ fn page_fps(url: &str, seconds: u32) -> Vec<String> {
     let mut child = Command::new("timeout")
         .arg(seconds.to_string())
         .arg(binary)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--use-gl=swiftshader",
-            "--enable-unsafe-swiftshader",
-            "--no-first-run",
-            "--hide-scrollbars",
-            "--window-size=1000,700",
-            "--enable-logging=stderr",
-            "--v=0",
-        ])
+        .args(CHROMIUM_FLAGS)
+        .args(["--window-size=1000,700", "--enable-logging=stderr", "--v=0"])
         .arg(format!("--user-data-dir={}", profile.path().display()))
         .arg(url)
         .stdout(Stdio::null())

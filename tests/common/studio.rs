@@ -123,3 +123,14 @@ pub const PAGE_TEST_IDS: &[&str] = &[
     "joint-count",
     "show-contacts",
 ];
+
+/// Headless Chromium drawing WebGL on the processor (SwiftShader; no GPU on CI).
+pub const CHROMIUM_FLAGS: [&str; 7] = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--use-gl=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--no-first-run",
+    "--hide-scrollbars",
+];
