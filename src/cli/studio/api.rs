@@ -441,21 +441,7 @@ mod tests {
         let path = std::path::Path::new("box-gas-4000.ron");
         let def = crate::scene::parse(text, path).expect("parses");
         let sim = crate::scene::build(&def, path).expect("builds");
-        let studio = Studio {
-            def,
-            path: path.into(),
-            scene_name: "box-gas-4000".into(),
-            sim,
-            running: false,
-            speed: 1.0,
-            schedule: None,
-            version: 1,
-            error: None,
-            mesh_dir: std::env::temp_dir(),
-            steps_per_second: 0.0,
-            added: 0,
-            edits: Vec::new(),
-        };
+        let studio = Studio::new(def, path.into(), "box-gas-4000".into(), sim, std::env::temp_dir());
         for round in 0..3 {
             let n = 1000;
             let start = std::time::Instant::now();

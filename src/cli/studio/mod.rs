@@ -54,6 +54,25 @@ pub(crate) struct Studio {
 }
 
 impl Studio {
+    /// A paused studio on `sim`, built from `def` at `path`, uploads kept in `mesh_dir`.
+    pub fn new(def: SceneDef, path: PathBuf, scene_name: String, sim: Sim, mesh_dir: PathBuf) -> Self {
+        Self {
+            def,
+            path,
+            scene_name,
+            sim,
+            running: false,
+            speed: 1.0,
+            schedule: None,
+            version: 1,
+            error: None,
+            mesh_dir,
+            steps_per_second: 0.0,
+            added: 0,
+            edits: Vec::new(),
+        }
+    }
+
     /// Rebuilds `sim` from `def` (and the API's schedule, if any).
     pub fn rebuild(&mut self) -> Result<(), String> {
         let mut sim = build_sim(&self.def, &self.path, self.schedule.as_deref(), &self.mesh_dir)?;
@@ -115,21 +134,7 @@ pub(super) fn studio(args: &StudioArgs) -> Result<(), AppError> {
     // Created by the first upload: a studio that uploads nothing leaves nothing behind.
     let mesh_dir = std::env::temp_dir().join(format!("rigid-studio-{}", std::process::id()));
     let scene_name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-    let shared: Shared = Arc::new(Mutex::new(Studio {
-        def,
-        path,
-        scene_name,
-        sim,
-        running: false,
-        speed: 1.0,
-        schedule: None,
-        version: 1,
-        error: None,
-        mesh_dir: mesh_dir.clone(),
-        steps_per_second: 0.0,
-        added: 0,
-        edits: Vec::new(),
-    }));
+    let shared: Shared = Arc::new(Mutex::new(Studio::new(def, path, scene_name, sim, mesh_dir.clone())));
 
     let server = tiny_http::Server::http((args.host.as_str(), args.port))
         .map_err(|e| AppError::Usage(format!("cannot listen on {}:{}: {e}", args.host, args.port)))?;
