@@ -264,3 +264,16 @@ fn a_bad_ccd_value_is_bad_input_with_line_and_column() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains(&format!("{p}:2:")) && !err.contains("panicked"), "{err}");
 }
+
+#[test]
+fn the_shipped_bullet_scene_bounces_as_its_comment_says() {
+    // scenes/bullet.ron: at the wall (x = −0.15) after 1.85 m, then back for the rest of 1 s.
+    let mut sim = sim_of("bullet.ron", |_| {});
+    sim.run(60).expect("finite");
+    let cube = actor(&sim, "cube");
+    assert_close(cube.velocity.linear.x, -200.0, 200.0 * 1e-6, "speed kept, reversed");
+    // It turns a hair short of the wall (the impact gap, docs/physics.md §6.7): 1 mm at most.
+    let at_wall = -0.15 - 200.0 * (1.0 - 1.85 / 200.0);
+    let short = at_wall - cube.pose.position.x;
+    assert!((0.0..=0.001 + 1e-9).contains(&short), "bounced {short} m short of the wall");
+}
