@@ -10,7 +10,7 @@
 //! (points, locked rotations, rods) are solved together, exactly (`JointSystem`); the others
 //! one joint after another, before them.
 
-use super::joint_system::ScaledRow;
+use super::joint_system::{MAX_ROWS, ScaledRow};
 use super::joints::{Frame, Geometry, Joint, JointImpulses, JointKind, Joints};
 use super::{BodyStore, SolverBody};
 use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
@@ -228,10 +228,15 @@ fn one_by_one(kind: &JointKind) -> bool {
     }
 }
 
-/// A joint's equality rows at geometry `g`, handed to `push` in order: each row, its position
-/// error and where its impulse is kept. Points and locked rotations on world axes where all
-/// three are held, across the axis where two are.
-fn equality_rows(joint: &Joint, g: &Geometry, mut push: impl FnMut(Row, Scalar, Carry)) {
+/// A joint's equality rows at geometry `g`, written to `out` in order (their count returned):
+/// each row, its position error and where its impulse is kept. Points and locked rotations on
+/// world axes where all three are held, across the axis where two are.
+fn equality_rows(joint: &Joint, g: &Geometry, out: &mut [(Row, Scalar, Carry); MAX_ROWS]) -> usize {
+    let mut count = 0;
+    let mut push = |row: Row, c: Scalar, how: Carry| {
+        out[count] = (row, c, how);
+        count += 1;
+    };
     let axes = [Vector::X, Vector::Y, Vector::Z];
     if matches!(joint.kind, JointKind::Ball { .. } | JointKind::Hinge { .. } | JointKind::Fixed) {
         for (k, n) in axes.into_iter().enumerate() {
@@ -263,6 +268,7 @@ fn equality_rows(joint: &Joint, g: &Geometry, mut push: impl FnMut(Row, Scalar, 
             push(Row::angular(u), twist[k], Carry::Angular(u));
         }
     }
+    count
 }
 
 /// Runs `pass` over every joint with substeps of `h` [s]: the one-sided and driven rows joint
@@ -314,8 +320,12 @@ fn refresh<B: BodyStore + ?Sized>(bodies: &B, joints: &mut Joints) {
     }));
     for &(k, first, len) in spans.iter() {
         let (joint, imp, e) = (&list[k], &impulses[k], &ends[k]);
-        let mut i = first;
-        equality_rows(joint, &geometry[k], |row, c, how| {
+        // Gathered first and written in one place, so the writing is inlined (a callback per
+        // row was a call per row).
+        let mut out = [(Row::angular(Vector::ZERO), 0.0, Carry::Axial); MAX_ROWS];
+        let count = equality_rows(joint, &geometry[k], &mut out);
+        debug_assert_eq!(count, len, "equality_count and equality_rows disagree");
+        for (i, &(row, c, how)) in (first..first + len).zip(&out[..count]) {
             system.rows[i] = ScaledRow { lin: row.lin, g_a: e[0].scale * row.ang_a, g_b: e[1].scale * row.ang_b };
             system.error[i] = c;
             system.acc[i] = match how {
@@ -324,9 +334,7 @@ fn refresh<B: BodyStore + ?Sized>(bodies: &B, joints: &mut Joints) {
                 Carry::Axial => imp.axial,
             };
             carry[i] = how;
-            i += 1;
-        });
-        debug_assert_eq!(i, first + len, "equality_count and equality_rows disagree");
+        }
     }
     system.factorise();
     joints.stale = false;

@@ -64,6 +64,10 @@ struct Shape {
     touching: Vec<(u32, u32, u32)>,
     /// Number of off-diagonal blocks, fill included.
     blocks: usize,
+    /// The nodes with no neighbour (in node order), first in `order`, and the others (in
+    /// node order): a lone node's K is its own block, solved without the elimination.
+    lone: Vec<u32>,
+    linked: Vec<u32>,
 }
 
 /// One Schur-complement update of the factorisation.
@@ -152,7 +156,18 @@ impl JointSystem {
                 }
             }
         }
-        for (pos, &k) in self.shape.order.iter().enumerate() {
+        for &k in &self.shape.lone {
+            let d = &mut self.diag[k as usize];
+            // Each count its own unrolled copy.
+            match self.nodes[k as usize].len {
+                3 => ldl(d, 3),
+                5 => ldl(d, 5),
+                6 => ldl(d, 6),
+                m => ldl(d, m),
+            }
+        }
+        let lone = self.shape.lone.len();
+        for (pos, &k) in self.shape.order.iter().enumerate().skip(lone) {
             let k = k as usize;
             let m = self.nodes[k].len;
             ldl(&mut self.diag[k], m);
@@ -175,7 +190,8 @@ impl JointSystem {
     /// Solves K x = rhs in place (`rhs` in, x out), row after row as `rows`.
     fn solve_in_place(&mut self) {
         let y = &mut self.rhs;
-        for (pos, &k) in self.shape.order.iter().enumerate() {
+        let lone = self.shape.lone.len();
+        for (pos, &k) in self.shape.order.iter().enumerate().skip(lone) {
             let nk = &self.nodes[k as usize];
             let [(lo, hi), _] = self.shape.ranges[pos];
             for &(n, b) in &self.shape.later[lo as usize..hi as usize] {
@@ -187,7 +203,7 @@ impl JointSystem {
                 }
             }
         }
-        for (pos, &k) in self.shape.order.iter().enumerate().rev() {
+        for (pos, &k) in self.shape.order.iter().enumerate().skip(lone).rev() {
             let nk = &self.nodes[k as usize];
             // Element by element: a slice copy of three to six numbers is a call to memcpy.
             let mut x = [0.0; MAX_ROWS];
@@ -210,15 +226,34 @@ impl JointSystem {
     }
 
     /// One pass: λ = `mass_scale` K⁻¹(−J v − `bias_rate` C) − `impulse_scale` λ_acc for every
-    /// row at once (a soft step's spring, or rigid), applied to the bodies.
-    pub fn pass<B: BodyStore + ?Sized>(&mut self, bodies: &mut B, [bias_rate, mass_scale, impulse_scale]: [Scalar; 3]) {
-        for node in &self.nodes {
+    /// row at once (a soft step's spring, or rigid), applied to the bodies. A lone node shares
+    /// no body with another, so it is solved whole, on its two bodies gathered once, with the
+    /// same arithmetic as the general path (the same bits).
+    pub fn pass<B: BodyStore + ?Sized>(&mut self, bodies: &mut B, soft: [Scalar; 3]) {
+        for &k in &self.shape.lone {
+            let node = self.nodes[k as usize];
+            let (d, span) = (&self.diag[k as usize], node.first..node.first + node.len);
+            let (rows, error, acc) = (&self.rows[span.clone()], &self.error[span.clone()], &mut self.acc[span]);
+            match node.len {
+                3 => lone_pass::<B, 3>(bodies, &node.ends, d, rows, error, acc, soft),
+                5 => lone_pass::<B, 5>(bodies, &node.ends, d, rows, error, acc, soft),
+                6 => lone_pass::<B, 6>(bodies, &node.ends, d, rows, error, acc, soft),
+                _ => lone_pass::<B, 1>(bodies, &node.ends, d, rows, error, acc, soft),
+            }
+        }
+        if self.shape.linked.is_empty() {
+            return;
+        }
+        let [bias_rate, mass_scale, impulse_scale] = soft;
+        for &k in &self.shape.linked {
+            let node = &self.nodes[k as usize];
             for i in node.first..node.first + node.len {
                 self.rhs[i] = -(speed(bodies, &node.ends, &self.rows[i]) + bias_rate * self.error[i]);
             }
         }
         self.solve_in_place();
-        for node in &self.nodes {
+        for &k in &self.shape.linked {
+            let node = &self.nodes[k as usize];
             for i in node.first..node.first + node.len {
                 let l = mass_scale * self.rhs[i] - impulse_scale * self.acc[i];
                 self.acc[i] += l;
@@ -229,12 +264,94 @@ impl JointSystem {
 
     /// Re-applies the accumulated impulses.
     pub fn warm<B: BodyStore + ?Sized>(&self, bodies: &mut B) {
-        for node in &self.nodes {
+        for &k in &self.shape.lone {
+            let node = &self.nodes[k as usize];
+            let span = node.first..node.first + node.len;
+            let mut pair = Gathered::new(bodies, &node.ends);
+            for (row, &l) in self.rows[span.clone()].iter().zip(&self.acc[span]) {
+                pair.apply(&node.ends, row, l);
+            }
+            pair.store(bodies, &node.ends);
+        }
+        for &k in &self.shape.linked {
+            let node = &self.nodes[k as usize];
             for i in node.first..node.first + node.len {
                 apply(bodies, &node.ends, &self.rows[i], self.acc[i]);
             }
         }
     }
+}
+
+/// A lone node's two bodies' velocities, read once for a pass and written back after it.
+struct Gathered {
+    a: (Vector, Vector),
+    b: (Vector, Vector),
+}
+
+impl Gathered {
+    #[inline(always)]
+    fn new<B: BodyStore + ?Sized>(bodies: &B, [ea, eb]: &[End; 2]) -> Self {
+        let (a, b) = (bodies.body(ea.slot), bodies.body(eb.slot));
+        Self { a: (a.v, a.w), b: (b.v, b.w) }
+    }
+
+    /// The speed a row measures (as `speed`).
+    #[inline(always)]
+    fn speed(&self, row: &ScaledRow) -> Scalar {
+        row.lin.dot(self.a.0 - self.b.0) + row.g_a.dot(self.a.1) - row.g_b.dot(self.b.1)
+    }
+
+    /// Applies impulse `lambda` along a row (as `apply`).
+    #[inline(always)]
+    fn apply(&mut self, [ea, eb]: &[End; 2], row: &ScaledRow, lambda: Scalar) {
+        if ea.free {
+            self.a.0 += row.lin * (ea.inv_mass * lambda);
+            self.a.1 += row.g_a * lambda;
+        }
+        if eb.free {
+            self.b.0 -= row.lin * (eb.inv_mass * lambda);
+            self.b.1 -= row.g_b * lambda;
+        }
+    }
+
+    #[inline(always)]
+    fn store<B: BodyStore + ?Sized>(&self, bodies: &mut B, [ea, eb]: &[End; 2]) {
+        if ea.free {
+            let a = bodies.body_mut(ea.slot);
+            (a.v, a.w) = self.a;
+        }
+        if eb.free {
+            let b = bodies.body_mut(eb.slot);
+            (b.v, b.w) = self.b;
+        }
+    }
+}
+
+/// `JointSystem::pass` for a lone node of `M` rows (`M` = 1 stands for any other count: the
+/// rows' length is used).
+#[inline(always)]
+fn lone_pass<B: BodyStore + ?Sized, const M: usize>(
+    bodies: &mut B,
+    ends: &[End; 2],
+    d: &Block,
+    rows: &[ScaledRow],
+    error: &[Scalar],
+    acc: &mut [Scalar],
+    [bias_rate, mass_scale, impulse_scale]: [Scalar; 3],
+) {
+    let m = if M == 1 { rows.len() } else { M };
+    let mut pair = Gathered::new(bodies, ends);
+    let mut x = [0.0; MAX_ROWS];
+    for i in 0..m {
+        x[i] = -(pair.speed(&rows[i]) + bias_rate * error[i]);
+    }
+    ldl_solve(d, m, &mut x);
+    for i in 0..m {
+        let l = mass_scale * x[i] - impulse_scale * acc[i];
+        acc[i] += l;
+        pair.apply(ends, &rows[i], l);
+    }
+    pair.store(bodies, ends);
 }
 
 impl Shape {
@@ -262,6 +379,7 @@ impl Shape {
                 }
             }
         }
+        let lone: Vec<bool> = adj.iter().map(BTreeSet::is_empty).collect();
         let mut heap: BinaryHeap<_> = (0..n as u32).map(|k| Reverse((adj[k as usize].len(), k))).collect();
         let (mut done, mut order, mut later_of) = (vec![false; n], Vec::with_capacity(n), vec![Vec::new(); n]);
         while let Some(Reverse((degree, k))) = heap.pop() {
@@ -314,6 +432,8 @@ impl Shape {
             shape.touching.push((index[&(first, second)], first, second));
         }
         shape.blocks = index.len();
+        (shape.lone, shape.linked) = (0..n as u32).partition(|&k| lone[k as usize]);
+        debug_assert!(shape.order.iter().zip(&shape.lone).all(|(a, b)| a == b), "lone nodes come first");
         shape
     }
 }
@@ -360,6 +480,7 @@ fn apply<B: BodyStore + ?Sized>(bodies: &mut B, [ea, eb]: &[End; 2], row: &Scale
 
 /// LDLᵀ of the symmetric `m` × `m` block `a` (its lower triangle), in place: L below the
 /// diagonal, 1/d on it, a dropped pivot (`DROP`) as 0 with its column of L.
+#[inline(always)]
 fn ldl(a: &mut Block, m: usize) {
     let mut d = [0.0; MAX_ROWS];
     for j in 0..m {
@@ -377,6 +498,7 @@ fn ldl(a: &mut Block, m: usize) {
 }
 
 /// Solves D x = `x` in place with D factorised by `ldl`.
+#[inline(always)]
 fn ldl_solve(f: &Block, m: usize, x: &mut [Scalar; MAX_ROWS]) {
     for i in 0..m {
         x[i] -= (0..i).map(|k| f[i * MAX_ROWS + k] * x[k]).sum::<Scalar>();
@@ -420,6 +542,7 @@ mod tests {
     use super::*;
     use crate::math::{Mat3, Quat};
     use crate::rng::SplitMix64;
+    use crate::solver::SolverBody;
 
     fn vector(rng: &mut SplitMix64) -> Vector {
         Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5)
@@ -490,17 +613,61 @@ mod tests {
             (9, Some(10), 3),
             (10, Some(8), 1),
             (8, None, 6),
+            // Lone: joined to nothing else (to the world, or two bodies of their own).
+            (11, None, 3),
+            (12, Some(13), 5),
+            (14, None, 1),
         ];
-        for (links, bodies) in [(chain, 8), (star, 11)] {
+        for (links, bodies) in [(chain, 8), (star, 15)] {
             let mut s = system(&links, bodies, &mut rng);
             s.factorise();
             let k = dense(&s);
             let rhs: Vec<Scalar> = (0..s.rows.len()).map(|_| rng.unit() - 0.5).collect();
             s.rhs.copy_from_slice(&rhs);
             s.solve_in_place();
+            // The lone nodes are solved by `pass`, on their own block.
+            for &k in &s.shape.lone {
+                let n = &s.nodes[k as usize];
+                let mut x = [0.0; MAX_ROWS];
+                x[..n.len].copy_from_slice(&s.rhs[n.first..n.first + n.len]);
+                ldl_solve(&s.diag[k as usize], n.len, &mut x);
+                s.rhs[n.first..n.first + n.len].copy_from_slice(&x[..n.len]);
+            }
             for (i, row) in k.iter().enumerate() {
                 let kx: Scalar = row.iter().zip(&s.rhs).map(|(a, x)| a * x).sum();
                 assert!((kx - rhs[i]).abs() < 1e-9, "row {i}: {kx} against {}", rhs[i]);
+            }
+        }
+    }
+
+    #[test]
+    fn a_rigid_pass_stops_every_equality_row_lone_or_linked() {
+        let mut rng = SplitMix64::new(5);
+        // Two lone pendulums, a chain of three, a lone rod between two bodies.
+        let links = [(0, None, 3), (1, None, 5), (2, None, 3), (3, Some(2), 6), (4, Some(3), 3), (5, Some(6), 1)];
+        let mut s = system(&links, 7, &mut rng);
+        assert_eq!(s.shape.lone, [0, 1, 5]);
+        // The world's end turns nothing (its S is zero), as in the solver.
+        for node in &s.nodes {
+            if !node.ends[1].free {
+                s.rows[node.first..node.first + node.len].iter_mut().for_each(|r| r.g_b = Vector::ZERO);
+            }
+        }
+        s.factorise();
+        let mut bodies: Vec<SolverBody> = (0..8)
+            .map(|b| {
+                if b < 7 {
+                    SolverBody { v: vector(&mut rng), w: vector(&mut rng), ..SolverBody::default() }
+                } else {
+                    SolverBody::default()
+                }
+            })
+            .collect();
+        s.pass(bodies.as_mut_slice(), [0.0, 1.0, 0.0]);
+        for node in &s.nodes {
+            for row in &s.rows[node.first..node.first + node.len] {
+                let v = speed(bodies.as_slice(), &node.ends, row);
+                assert!(v.abs() < 1e-12, "joint {}: speed {v}", node.joint);
             }
         }
     }

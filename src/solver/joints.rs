@@ -151,10 +151,7 @@ impl Joint {
         let g = Geometry::new(self, pa, pb);
         let excess = |x: Scalar, [lo, hi]: [Scalar; 2]| (lo - x).max(x - hi).max(0.0);
         match self.kind {
-            JointKind::Ball { cone } => {
-                let swing = g.u_a.angle_between(g.u_b);
-                (g.d.length(), cone.map_or(0.0, |c| (swing - c).max(0.0)))
-            }
+            JointKind::Ball { cone } => (g.d.length(), cone.map_or(0.0, |c| (g.u_a.angle_between(g.u_b) - c).max(0.0))),
             JointKind::Hinge { limits, .. } => {
                 let tilt = g.u_a.angle_between(g.u_b);
                 let turn = limits.map_or(0.0, |l| excess(g.turn(), l));
@@ -197,14 +194,21 @@ impl Geometry {
     pub fn new(joint: &Joint, (xa, qa): Frame, (xb, qb): Frame) -> Self {
         let (r_a, r_b) = (qa * joint.anchor_a, qb * joint.anchor_b);
         let (p_a, p_b) = (xa + r_a, xb + r_b);
+        // Only what the kind uses: a plain ball joint (a pendulum, a chain) needs its point alone.
+        let (axis, rest) = match joint.kind {
+            JointKind::Ball { cone } => (cone.is_some(), false),
+            JointKind::Hinge { .. } | JointKind::Slider { .. } => (true, true),
+            JointKind::Fixed => (false, true),
+            JointKind::Distance { .. } => (false, false),
+        };
         Self {
             r_a,
             r_b,
             d: p_a - p_b,
-            u_a: qa * joint.axis_a,
-            u_b: qb * joint.axis_b,
+            u_a: if axis { qa * joint.axis_a } else { Vector::ZERO },
+            u_b: if axis { qb * joint.axis_b } else { Vector::ZERO },
             q_a: qa,
-            q_target: qb * joint.rest,
+            q_target: if rest { qb * joint.rest } else { Quat::IDENTITY },
         }
     }
 
