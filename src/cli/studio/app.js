@@ -1,16 +1,7 @@
 // rigid studio: draws the running scene from /api/meshes (once per scene version) and
 // /api/frame (7 little-endian f32 per actor: position, quaternion x y z w), and drives the
-// JSON API (docs/studio.md). URL parameters, for scripts and tests:
-//   ?play=1                       start playing once loaded
-//   ?script=add-box,step:5,...    run actions in order once loaded: play, pause, reset,
-//                                 step:N, add-box, add-sphere, add-cylinder, untick:NAME,
-//                                 tick:NAME, wait:MS, select:NAME (as a click on it),
-//                                 click:FX/FY (a click at fractions of the viewport),
-//                                 edit:FIELD=VALUE (mass, restitution, friction or velocity
-//                                 as "x y z"; posted at once), save (fetch /api/scene into
-//                                 body[data-saved]), joints:on|off (draw the joints or not),
-//                                 contacts:on|off (draw the last step's contacts or not),
-//                                 scene:RON-TEXT (last: it may hold commas)
+// JSON API (docs/studio.md). URL parameters: ?play=1 starts playing once loaded; ?log=1
+// writes the frame rates to the console each second (tests/studio_fps.rs reads them).
 
 import * as THREE from './three.module.min.js';
 import { OrbitControls } from './OrbitControls.js';
@@ -687,57 +678,12 @@ function clickAt(fx, fy) {
 
 // ---- start ----------------------------------------------------------------------------------
 
-async function runScript(list) {
-  for (const item of list) {
-    const [what, arg] = item.split(':');
-    try {
-      if (what === 'play' || what === 'pause' || what === 'reset') await control({ action: what });
-      else if (what === 'step') await control({ action: 'step', steps: Number(arg || 1) });
-      else if (shapes[what]) await addActor(shapes[what]);
-      else if (what === 'scene') await api('/api/scene', item.slice('scene:'.length), false).then(pollState);
-      else if (what === 'untick' || what === 'tick') {
-        const box = document.querySelector(`[data-testid="system-${arg}"]`);
-        if (box) { box.checked = what === 'tick'; await postSchedule(); }
-      } else if (what === 'joints') {
-        $('show-joints').checked = arg !== 'off';
-        $('show-joints').dispatchEvent(new Event('change'));
-      } else if (what === 'contacts') {
-        $('show-contacts').checked = arg !== 'off';
-        await fetchContacts();
-      } else if (what === 'wait') await new Promise((r) => setTimeout(r, Number(arg || 100)));
-      else if (what === 'select') await select(arg || null);
-      else if (what === 'click') {
-        const [fx, fy] = (arg || '0.5/0.5').split('/').map(Number);
-        await clickAt(fx, fy);
-      }
-      else if (what === 'edit') {
-        const [field, value] = (arg || '').split('=');
-        if (!fields.includes(field)) {
-          showError(`edit: unknown field '${field}'; valid: ${fields.join(', ')}`);
-          continue;
-        }
-        $(`actor-${field}`).value = value ?? '';
-        await applyEdit([field]);
-      } else if (what === 'save') document.body.dataset.saved = await saveScene();
-      // Let clicks' requests finish before the next action.
-      await new Promise((r) => setTimeout(r, 50));
-    } catch (_) { /* shown in the error element */ }
-  }
-  document.body.dataset.script = 'done';
-}
-
 async function start() {
   await pollState();
   await fetchFrame();
   requestAnimationFrame(animate);
   setInterval(() => pollState().catch(() => {}), 500);
-  const raw = params.get('script') || '';
-  // `scene:` takes the rest of the script, commas and all.
-  const at = raw.startsWith('scene:') ? 0 : raw.indexOf(',scene:') + 1;
-  const script = (at > 0 || raw.startsWith('scene:') ? raw.slice(0, Math.max(at - 1, 0)) : raw).split(',').filter(Boolean);
-  if (at > 0 || raw.startsWith('scene:')) script.push(raw.slice(at));
-  if (params.get('play') === '1') script.unshift('play');
-  await runScript(script);
+  if (params.get('play') === '1') await control({ action: 'play' }).catch(() => {});
 }
 
 start().catch((e) => showError(`cannot start: ${e.message}`));
