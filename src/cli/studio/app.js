@@ -90,7 +90,11 @@ contactLines.frustumCulled = false;
 contactLines.visible = false;
 scene.add(contactLines);
 
-// Per (mesh, fixed) group: one InstancedMesh; for actor i, groupOf[i] = [group, instance].
+// Per (mesh, fixed) group: one merged mesh that draws every member, each vertex carrying its
+// member's index and the poses read from a float texture in the vertex shader; and an
+// InstancedMesh, never drawn, that the pointer's ray is tested against. For actor i,
+// groupOf[i] = [group, member]. (SwiftShader draws one call of many triangles several times
+// faster than the same triangles as instances; BENCH.md, issue #21.)
 let groups = [];
 let groupOf = [];
 let version = -1;
@@ -98,6 +102,7 @@ let lastFrame = null;
 let fitted = '';
 let sceneName = '';
 let loadingMeshes = false;
+const POSE_WIDTH = 2048;
 
 function flatGeometry(mesh) {
   const g = new THREE.BufferGeometry();
@@ -109,12 +114,63 @@ function flatGeometry(mesh) {
   return flat;
 }
 
+// `count` copies of `geometry`, each vertex tagged with its copy's index, coloured per copy.
+function mergedGeometry(geometry, members, coloured) {
+  const p = geometry.getAttribute('position').array;
+  const n = geometry.getAttribute('normal').array;
+  const v = p.length / 3;
+  const count = members.length;
+  const position = new Float32Array(p.length * count);
+  const normal = new Float32Array(n.length * count);
+  const body = new Float32Array(v * count);
+  const color = coloured ? new Float32Array(p.length * count) : null;
+  const c = new THREE.Color();
+  members.forEach((a, k) => {
+    position.set(p, k * p.length);
+    normal.set(n, k * n.length);
+    body.fill(k, k * v, (k + 1) * v);
+    if (color) {
+      c.setRGB(a.colour[0] / 255, a.colour[1] / 255, a.colour[2] / 255, THREE.SRGBColorSpace);
+      for (let j = 0; j < v; j++) color.set([c.r, c.g, c.b], (k * v + j) * 3);
+    }
+  });
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(position, 3));
+  g.setAttribute('normal', new THREE.BufferAttribute(normal, 3));
+  g.setAttribute('body', new THREE.BufferAttribute(body, 1));
+  if (color) g.setAttribute('color', new THREE.BufferAttribute(color, 3));
+  return g;
+}
+
+// A Lambert material whose vertex shader places each vertex by its member's pose (two texels:
+// position, then the quaternion x y z w).
+function posedMaterial(options, poses) {
+  const material = new THREE.MeshLambertMaterial(options);
+  material.onBeforeCompile = (shader) => {
+    shader.uniforms.poses = { value: poses };
+    shader.vertexShader = shader.vertexShader
+      .replace('#include <common>', `#include <common>
+attribute float body;
+uniform highp sampler2D poses;
+vec3 turn(vec4 q, vec3 v) { return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v); }
+vec4 poseTexel(int i) { return texelFetch(poses, ivec2(i % ${POSE_WIDTH}, i / ${POSE_WIDTH}), 0); }`)
+      .replace('#include <beginnormal_vertex>', `vec4 bodyAt = poseTexel(int(body) * 2);
+vec4 bodyTurn = poseTexel(int(body) * 2 + 1);
+vec3 objectNormal = turn(bodyTurn, normal);`)
+      .replace('#include <begin_vertex>', 'vec3 transformed = turn(bodyTurn, position) + bodyAt.xyz;');
+  };
+  return material;
+}
+
 async function loadMeshes() {
   loadingMeshes = true;
   try {
     const m = await api('/api/meshes');
     for (const g of groups) {
-      scene.remove(g.object);
+      scene.remove(g.draw);
+      g.draw.geometry.dispose();
+      g.draw.material.dispose();
+      g.poses.dispose();
       g.object.dispose();
     }
     const geometries = m.meshes.map(flatGeometry);
@@ -128,20 +184,17 @@ async function loadMeshes() {
     });
     groups = [...byKey.values()];
     for (const g of groups) {
+      const rows = Math.ceil((g.members.length * 2) / POSE_WIDTH);
+      g.poses = new THREE.DataTexture(new Float32Array(POSE_WIDTH * rows * 4), POSE_WIDTH, rows, THREE.RGBAFormat, THREE.FloatType);
+      g.poses.needsUpdate = true;
       const material = g.fixed
-        ? new THREE.MeshLambertMaterial({ color: 0xa0a0a8, transparent: true, opacity: 0.35, depthWrite: false })
-        : new THREE.MeshLambertMaterial({ color: 0xffffff });
+        ? posedMaterial({ color: 0xa0a0a8, transparent: true, opacity: 0.35, depthWrite: false }, g.poses)
+        : posedMaterial({ color: 0xffffff, vertexColors: true }, g.poses);
+      g.draw = new THREE.Mesh(mergedGeometry(geometries[g.mesh], g.members, !g.fixed), material);
+      g.draw.frustumCulled = false;
+      scene.add(g.draw);
       g.object = new THREE.InstancedMesh(geometries[g.mesh], material, g.members.length);
-      g.object.instanceMatrix.setUsage(THREE.DynamicDrawUsage);
       g.object.frustumCulled = false;
-      if (!g.fixed) {
-        const c = new THREE.Color();
-        g.members.forEach((a, k) => {
-          c.setRGB(a.colour[0] / 255, a.colour[1] / 255, a.colour[2] / 255, THREE.SRGBColorSpace);
-          g.object.setColorAt(k, c);
-        });
-      }
-      scene.add(g.object);
     }
     setJoints(m.joints || []);
     version = m.version;
@@ -159,14 +212,30 @@ function applyFrame(f) {
   const n = Math.min(groupOf.length, f.length / 7);
   for (let i = 0; i < n; i++) {
     const [g, k] = groupOf[i];
+    const d = g.poses.image.data;
+    d[8 * k] = f[7 * i];
+    d[8 * k + 1] = f[7 * i + 1];
+    d[8 * k + 2] = f[7 * i + 2];
+    d[8 * k + 4] = f[7 * i + 3];
+    d[8 * k + 5] = f[7 * i + 4];
+    d[8 * k + 6] = f[7 * i + 5];
+    d[8 * k + 7] = f[7 * i + 6];
+  }
+  for (const g of groups) g.poses.needsUpdate = true;
+  placeJoints(f);
+  dirty = true;
+}
+
+// The pick meshes' instances where the bodies are in `f` (done on a click, not every frame).
+function placePickMeshes(f) {
+  const n = Math.min(groupOf.length, f.length / 7);
+  for (let i = 0; i < n; i++) {
+    const [g, k] = groupOf[i];
     pos.set(f[7 * i], f[7 * i + 1], f[7 * i + 2]);
     quat.set(f[7 * i + 3], f[7 * i + 4], f[7 * i + 5], f[7 * i + 6]);
     m4.compose(pos, quat, one);
     g.object.setMatrixAt(k, m4);
   }
-  for (const g of groups) g.object.instanceMatrix.needsUpdate = true;
-  placeJoints(f);
-  dirty = true;
 }
 
 function setJoints(list) {
@@ -637,6 +706,7 @@ $('save').onclick = async () => {
 
 // The actor under a viewport point (free bodies before fixed ones), or null.
 function pickActor(ray) {
+  if (lastFrame) placePickMeshes(lastFrame);
   const objects = groups.map((g) => g.object);
   // Instances move every frame: refresh the bounds the raycast first tests against.
   for (const o of objects) o.computeBoundingSphere();
