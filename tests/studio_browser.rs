@@ -1,203 +1,288 @@
-//! `rigid studio`'s page in a real browser: Debian's `chromium`, headless, from the command line
-//! (no driver). The page reads URL parameters (`?play=1`, `?script=...`, docs/studio.md) to
-//! act without clicks; `--dump-dom` shows the result and `--screenshot` what was drawn.
-//! Needs Chromium (`CHROMIUM` names another binary): `.ci/run` installs it and runs
-//! `cargo test --test studio_browser -- --ignored`.
+//! `rigid studio`'s page in a real browser, through its controls as a user would: Debian's
+//! `chromium`, headless, driven by `chromedriver` over the W3C WebDriver protocol
+//! (tests/common/studio/webdriver.rs). Files are chosen through the page's file inputs, buttons
+//! and the viewport are clicked, screenshots are decoded. Needs `chromium` and `chromium-driver`:
+//! `.ci/run` installs them and runs `cargo test --test studio_browser -- --ignored`.
 
 mod common;
-use common::studio::{CHROMIUM_FLAGS, PAGE_TEST_IDS, Studio, get, start};
+use common::studio::webdriver::{Browser, absolute};
+use common::studio::{PAGE_TEST_IDS, Studio, get, start};
 use serde_json::Value;
-use std::process::{Command, Stdio};
+use std::path::Path;
 
 fn state(studio: &Studio) -> Value {
     get(studio, "/api/state")
 }
 
-/// Percent-encodes a URL query value.
-fn encode(text: &str) -> String {
-    text.bytes()
-        .map(|b| {
-            if b.is_ascii_alphanumeric() || b"-_.~".contains(&b) {
-                (b as char).to_string()
-            } else {
-                format!("%{b:02X}")
-            }
-        })
-        .collect()
+fn actors(studio: &Studio) -> Vec<Value> {
+    state(studio)["actors"].as_array().expect("actors").clone()
 }
 
-/// Runs headless Chromium on `url` with `mode` (`--dump-dom` or `--screenshot=FILE`) after
-/// `budget_ms` of virtual time; returns stdout.
-fn chromium(url: &str, mode: &str, budget_ms: u32) -> String {
-    let profile = tempfile::tempdir().expect("temp dir");
-    let binary = std::env::var("CHROMIUM").unwrap_or_else(|_| "chromium".to_string());
-    let out = Command::new("timeout")
-        .arg("90")
-        .arg(binary)
-        .args(CHROMIUM_FLAGS)
-        .args(["--window-size=800,600"])
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .arg(format!("--virtual-time-budget={budget_ms}"))
-        .arg(mode)
-        .arg(url)
-        .stderr(Stdio::null())
-        .output()
-        .expect("chromium runs (apt-get install chromium)");
-    assert!(out.status.success(), "chromium failed: {:?}", out.status);
-    String::from_utf8_lossy(&out.stdout).into_owned()
+/// A browser on the studio's page, loaded.
+fn page(studio: &Studio) -> Browser {
+    let b = Browser::start(800, 600);
+    b.open(&format!("http://{}/", studio.addr));
+    b
 }
 
-/// The text of the element with `data-testid="id"` in a dumped DOM, and its opening tag.
-fn element<'a>(dom: &'a str, id: &str) -> (&'a str, &'a str) {
-    let marker = format!("data-testid=\"{id}\"");
-    let at = dom.find(&marker).unwrap_or_else(|| panic!("no {id} in the page"));
-    let open = dom[..at].rfind('<').expect("tag start");
-    let end = at + dom[at..].find('>').expect("tag end");
-    let text_end = end + dom[end..].find('<').unwrap_or(dom.len() - end);
-    (&dom[open..=end], &dom[end + 1..text_end])
+/// Waits until the page's `actor-count` shows `n`.
+fn wait_count(b: &Browser, n: usize) {
+    b.wait_for(&format!("actor-count {n}"), || (b.text("actor-count") == n.to_string()).then_some(()));
 }
 
-fn attribute(tag: &str, name: &str) -> Option<String> {
-    let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
-    Some(tag[at..at + tag[at..].find('"')?].to_string())
+/// The page's `data-time` and `data-step` of the `time` element.
+fn page_time(b: &Browser) -> (f64, u64) {
+    let time = b.attribute("time", "data-time").and_then(|t| t.parse().ok()).expect("data-time");
+    let step = b.attribute("time", "data-step").and_then(|t| t.parse().ok()).expect("data-step");
+    (time, step)
+}
+
+/// The viewport's pixels in a screenshot.
+fn viewport_pixels(b: &Browser) -> Vec<[u8; 3]> {
+    let shot = b.screenshot();
+    let [x, y, w, h] = b.rect("viewport").map(|v| v.round() as u32);
+    assert!(w > 300 && h > 300, "viewport {w}x{h}");
+    assert!(
+        shot.width() >= x + w && shot.height() >= y + h,
+        "screenshot {:?}, viewport at {x},{y} {w}x{h}",
+        shot.dimensions()
+    );
+    image::imageops::crop_imm(&shot, x, y, w, h).to_image().pixels().map(|p| p.0).collect()
 }
 
 #[test]
-#[ignore = "needs Chromium: .ci/run installs it and runs these"]
-fn the_page_has_every_control_and_time_advances() {
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
+fn the_page_has_every_control_and_play_advances_time() {
     let s = start("scenes/box-drop.ron");
-    let dom = chromium(&format!("http://{}/?play=1", s.addr), "--dump-dom", 3000);
+    let b = page(&s);
     for id in PAGE_TEST_IDS.iter().chain(&["system-gravity", "system-integrate"]) {
-        element(&dom, id);
+        b.find(id);
     }
-    let (tag, text) = element(&dom, "time");
-    let time: f64 = attribute(tag, "data-time").and_then(|t| t.parse().ok()).expect("data-time");
-    assert!(time > 0.0, "time does not advance: {tag}{text}");
+    assert_eq!(b.text("actor-count"), "2");
+    assert_eq!(page_time(&b), (0.0, 0), "the studio starts paused");
+
+    b.click("play");
+    let (time, step) = b.wait_for("time to advance", || Some(page_time(&b)).filter(|t| t.1 >= 10));
+    assert!(time > 0.0 && step >= 10, "{time} s, step {step}");
+    let text = b.text("time");
     assert!(text.ends_with(')') && text.contains(" s (step "), "{text}");
-    assert_eq!(element(&dom, "actor-count").1, "2");
-    assert!(element(&dom, "timings").1.contains("integrate"), "{}", element(&dom, "timings").1);
-    assert_eq!(element(&dom, "error").1, "", "the page shows an error");
     assert_eq!(state(&s)["running"], true);
+    b.wait_for("the timings", || b.text("timings").contains("integrate").then_some(()));
+
+    b.click("pause");
+    b.wait_for("a pause", || (state(&s)["running"] == false).then_some(()));
+    let paused = state(&s)["step"].as_u64().expect("step");
+    b.click("step");
+    b.wait_for("one step", || (state(&s)["step"].as_u64() == Some(paused + 1)).then_some(()));
+    b.wait_for("the page to show it", || (page_time(&b).1 == paused + 1).then_some(()));
+    assert_eq!(b.text("error"), "", "the page shows an error");
 }
 
 #[test]
-#[ignore = "needs Chromium: .ci/run installs it and runs these"]
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
 fn the_viewport_draws_the_scene() {
     let s = start("scenes/mixed-shapes.ron");
-    let dir = tempfile::tempdir().expect("temp dir");
-    let png = dir.path().join("shot.png");
-    chromium(&format!("http://{}/?play=1", s.addr), &format!("--screenshot={}", png.display()), 3000);
-    let image = image::open(&png).expect("a PNG").to_rgb8();
-    assert_eq!(image.dimensions(), (800, 600));
-    // The viewport is right of the 270-pixel side panel.
-    let mut colours = std::collections::HashSet::new();
-    let mut saturated = 0;
-    for (_, _, p) in image.enumerate_pixels().filter(|(x, _, _)| *x >= 280) {
-        colours.insert(p.0);
-        let [r, g, b] = p.0.map(i32::from);
-        if r.max(g).max(b) - r.min(g).min(b) > 60 {
-            saturated += 1;
-        }
-    }
+    let b = page(&s);
+    b.click("play");
+    b.wait_for("time to advance", || (page_time(&b).1 >= 30).then_some(()));
+    let pixels = viewport_pixels(&b);
+    let colours: std::collections::HashSet<[u8; 3]> = pixels.iter().copied().collect();
     assert!(colours.len() > 50, "viewport looks blank: {} colours", colours.len());
     // The actors are coloured; the background, grid and panel are grey.
+    let saturated = pixels
+        .iter()
+        .filter(|p| {
+            let [r, g, b] = p.map(i32::from);
+            r.max(g).max(b) - r.min(g).min(b) > 60
+        })
+        .count();
     assert!(saturated > 500, "no coloured bodies drawn ({saturated} coloured pixels)");
 }
 
 #[test]
-#[ignore = "needs Chromium: .ci/run installs it and runs these"]
-fn scripted_actions_reach_the_api_and_errors_show() {
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
+fn a_scene_and_a_mesh_load_through_the_file_inputs() {
     let s = start("scenes/box-drop.ron");
-    let script = "add-box,add-sphere,add-cylinder,untick:gravity,step:5";
-    let dom = chromium(&format!("http://{}/?script={}", s.addr, encode(script)), "--dump-dom", 4000);
-    let st = state(&s);
-    assert_eq!(st["actors"].as_array().expect("actors").len(), 5, "{st}");
-    assert!(!st["schedule"].as_array().expect("schedule").iter().any(|n| n == "gravity"), "{st}");
-    assert_eq!(st["step"], 5);
-    assert_eq!(element(&dom, "actor-count").1, "5");
-    let (tag, _) = element(&dom, "system-gravity");
-    assert!(!tag.contains("checked"), "{tag}");
-    assert!(element(&dom, "system-integrate").0.contains("checked"));
-
-    // A bad scene: the page's error element shows the API's message with line:col.
-    let script = "scene:Scene(actors: [Actor(shape: Sphere)])";
-    let dom = chromium(&format!("http://{}/?script={}", s.addr, encode(script)), "--dump-dom", 3000);
-    let (_, error) = element(&dom, "error");
-    assert!(error.starts_with("&lt;studio&gt;:1:") || error.starts_with("<studio>:1:"), "{error}");
-    assert_eq!(state(&s)["actors"].as_array().expect("actors").len(), 5);
-}
-
-#[test]
-#[ignore = "needs Chromium: .ci/run installs it and runs these"]
-fn a_clicked_actor_is_selected_and_edited() {
-    let s = start("scenes/box-drop.ron");
-    // The camera frames the free box: a click at the viewport's centre picks it.
-    let script = "click:0.5/0.5,edit:mass=2.5,edit:friction=0.3,edit:velocity=1 0 -1,edit:restitution=7";
-    let dom = chromium(&format!("http://{}/?script={}", s.addr, encode(script)), "--dump-dom", 4000);
-    assert_eq!(element(&dom, "actor-name").1, "box");
-    let st = state(&s);
-    let b = &st["actors"][1];
-    assert_eq!(b["name"], "box");
-    assert_eq!(b["mass"].as_f64(), Some(2.5), "{b}");
-    assert_eq!(b["friction"].as_f64(), Some(0.3), "{b}");
-    assert_eq!(b["velocity"], serde_json::json!([1.0, 0.0, -1.0]), "{b}");
-    // The refused restitution leaves the old one and shows the API's message.
-    assert_eq!(b["restitution"].as_f64(), Some(0.0), "{b}");
-    assert!(element(&dom, "error").1.contains("restitution"), "{}", element(&dom, "error").1);
-    assert_eq!(attribute(element(&dom, "actor-mass").0, "value").as_deref(), Some("2.5"));
-    for id in ["actor-restitution", "actor-friction", "actor-velocity", "actor-apply", "save"] {
-        element(&dom, id);
-    }
-
-    // Selecting by name; a fixed actor's mass and velocity cannot be edited.
-    let script = "select:floor,save";
-    let dom = chromium(&format!("http://{}/?script={}", s.addr, encode(script)), "--dump-dom", 3000);
-    assert_eq!(element(&dom, "actor-name").1, "floor");
-    assert!(element(&dom, "actor-mass").0.contains("disabled"), "{}", element(&dom, "actor-mass").0);
-    assert!(!element(&dom, "actor-friction").0.contains("disabled"), "{}", element(&dom, "actor-friction").0);
-    assert!(dom.contains("data-saved=\"// Saved by rigid studio"), "the page did not fetch the saved scene");
-}
-
-/// Pixels of the joints' colour (cyan, 0x28dce6) right of the side panel in a screenshot.
-fn joint_pixels(url: &str) -> usize {
+    let b = page(&s);
     let dir = tempfile::tempdir().expect("temp dir");
-    let png = dir.path().join("shot.png");
-    chromium(url, &format!("--screenshot={}", png.display()), 3000);
-    let image = image::open(&png).expect("a PNG").to_rgb8();
-    image.enumerate_pixels().filter(|(x, _, p)| *x >= 280 && p.0[0] < 110 && p.0[1] > 170 && p.0[2] > 180).count()
+    let scene = dir.path().join("three.ron");
+    std::fs::write(
+        &scene,
+        "Scene(actors: [
+            Actor(name: \"ground\", shape: Box(size: (10.0, 1.0, 10.0)), position: (0.0, -0.5, 0.0), fixed: true),
+            Actor(name: \"a\", shape: Box(size: (1.0, 1.0, 1.0)), position: (0.0, 1.0, 0.0)),
+            Actor(name: \"b\", shape: Icosphere(radius: 0.5, subdivisions: 1), position: (2.0, 1.0, 0.0)),
+        ])",
+    )
+    .expect("write");
+    b.send_keys("scene-file", &absolute(&scene).display().to_string());
+    wait_count(&b, 3);
+    let names: Vec<Value> = actors(&s).iter().map(|a| a["name"].clone()).collect();
+    assert_eq!(names, ["ground", "a", "b"], "the file's scene is running");
+
+    b.send_keys("mesh-file", &absolute(Path::new("scenes/models/gem.obj")).display().to_string());
+    wait_count(&b, 4);
+    let all = actors(&s);
+    assert_eq!(all.len(), 4);
+    let gem = &all[3];
+    assert_eq!(gem["fixed"], false, "{gem}");
+    assert!(gem["mass"].as_f64().expect("mass") > 0.0, "{gem}");
+    assert_eq!(b.text("error"), "");
 }
 
 #[test]
-#[ignore = "needs Chromium: .ci/run installs it and runs these"]
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
+fn actors_are_added_from_the_palette_where_the_ground_was_clicked() {
+    let s = start("scenes/box-drop.ron");
+    let b = page(&s);
+    b.click("add-box");
+    wait_count(&b, 3);
+    let first = actors(&s)[2]["position"].clone();
+    // The camera frames the box at the centre: well below it is open floor.
+    b.click_at("viewport", -150, 180);
+    b.click("add-sphere");
+    wait_count(&b, 4);
+    let second = actors(&s)[3]["position"].clone();
+    let d = |i: usize| first[i].as_f64().expect("x") - second[i].as_f64().expect("x");
+    assert!(d(0).hypot(d(2)) > 1.0, "the click moved the drop point: {first} then {second}");
+    b.click("add-cylinder");
+    wait_count(&b, 5);
+    assert_eq!(actors(&s).len(), 5);
+}
+
+#[test]
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
+fn unticking_a_system_takes_it_out_of_the_schedule() {
+    let s = start("scenes/box-drop.ron");
+    let b = page(&s);
+    let schedule = |s: &Studio| -> Vec<String> {
+        state(s)["schedule"]
+            .as_array()
+            .expect("schedule")
+            .iter()
+            .map(|n| n.as_str().expect("name").to_string())
+            .collect()
+    };
+    let before = schedule(&s);
+    assert!(before.iter().any(|n| n == "gravity"), "{before:?}");
+    assert!(b.is_selected("system-gravity"));
+    b.click("system-gravity");
+    let after =
+        b.wait_for("gravity out of the schedule", || Some(schedule(&s)).filter(|n| !n.iter().any(|n| n == "gravity")));
+    let mut expected = before.clone();
+    expected.retain(|n| n != "gravity");
+    assert_eq!(after, expected, "only gravity left the schedule");
+    assert!(!b.is_selected("system-gravity"));
+    assert!(b.is_selected("system-integrate"));
+    // Without gravity the box floats where it was.
+    b.click("play");
+    b.wait_for("steps", || (page_time(&b).1 >= 30).then_some(()));
+    assert_eq!(actors(&s)[1]["position"][1].as_f64(), Some(2.0));
+    b.click("system-gravity");
+    b.wait_for("gravity back", || (schedule(&s) == before).then_some(()));
+}
+
+#[test]
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
+fn a_bad_scene_file_shows_its_error_and_the_scene_runs_on() {
+    let s = start("scenes/box-drop.ron");
+    let b = page(&s);
+    let dir = tempfile::tempdir().expect("temp dir");
+    let bad = dir.path().join("bad.ron");
+    std::fs::write(&bad, "Scene(actors: [\n  Actor(shape: Sphere)])\n").expect("write");
+    b.send_keys("scene-file", &absolute(&bad).display().to_string());
+    let error = b.wait_for("the error", || Some(b.text("error")).filter(|e| !e.is_empty()));
+    assert!(error.starts_with("<studio>:2:"), "a line:col message: {error}");
+    let names: Vec<Value> = actors(&s).iter().map(|a| a["name"].clone()).collect();
+    assert_eq!(names, ["floor", "box"], "the running scene is untouched");
+    assert_eq!(b.text("actor-count"), "2");
+}
+
+#[test]
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
+fn a_clicked_actor_is_edited_through_its_fields_and_saved() {
+    let s = start("scenes/box-drop.ron");
+    let b = page(&s);
+    // The camera frames the free box: a click at the viewport's centre picks it.
+    b.click_at("viewport", 0, 0);
+    b.wait_for("the box selected", || (b.text("actor-name") == "box").then_some(()));
+    b.wait_for("its fields", || (b.property("actor-mass", "value") == "1").then_some(()));
+    b.fill("actor-mass", "2.5");
+    b.fill("actor-friction", "0.3");
+    b.fill("actor-velocity", "1 0 -1");
+    b.click("actor-apply");
+    b.wait_for("the edit", || (actors(&s)[1]["mass"].as_f64() == Some(2.5)).then_some(()));
+    let a = &actors(&s)[1];
+    assert_eq!(a["name"], "box");
+    assert_eq!(a["friction"].as_f64(), Some(0.3), "{a}");
+    assert_eq!(a["velocity"], serde_json::json!([1.0, 0.0, -1.0]), "{a}");
+    assert_eq!(a["restitution"].as_f64(), Some(0.0), "{a}");
+
+    // A refused restitution shows the API's message and changes nothing.
+    b.fill("actor-restitution", "7");
+    b.click("actor-apply");
+    let error = b.wait_for("the error", || Some(b.text("error")).filter(|e| !e.is_empty()));
+    assert!(error.contains("restitution"), "{error}");
+    assert_eq!(actors(&s)[1]["restitution"].as_f64(), Some(0.0));
+
+    // The floor, clicked off the box: its mass and velocity cannot be edited.
+    b.click_at("viewport", -150, 180);
+    b.wait_for("the floor selected", || (b.text("actor-name") == "floor").then_some(()));
+    assert_eq!(b.property("actor-mass", "disabled"), true);
+    assert_eq!(b.property("actor-velocity", "disabled"), true);
+    assert_eq!(b.property("actor-friction", "disabled"), false);
+
+    b.click("save");
+    let saved = b.downloads().join("scene.ron");
+    let text =
+        b.wait_for("scene.ron downloaded", || std::fs::read_to_string(&saved).ok().filter(|t| t.ends_with('\n')));
+    assert!(text.starts_with("// Saved by rigid studio"), "{text}");
+    assert!(text.contains("mass: 2.5"), "the edit is saved: {text}");
+}
+
+/// Pixels of the joints' colour (cyan, 0x28dce6) in the viewport.
+fn joint_pixels(b: &Browser) -> usize {
+    viewport_pixels(b).iter().filter(|p| p[0] < 110 && p[1] > 170 && p[2] > 180).count()
+}
+
+#[test]
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
 fn joints_are_drawn_where_there_are_any() {
     let s = start("scenes/chain.ron");
-    let dom = chromium(&format!("http://{}/", s.addr), "--dump-dom", 3000);
-    let (tag, text) = element(&dom, "joint-count");
-    assert_eq!(text, "31");
-    assert_eq!(attribute(tag, "data-drawn").as_deref(), Some("31"), "{tag}");
-    assert!(element(&dom, "show-joints").0.contains("checked"), "{}", element(&dom, "show-joints").0);
-    // Drawn: the joints' colour is on screen, and goes when they are turned off.
-    let on = joint_pixels(&format!("http://{}/", s.addr));
-    let off = joint_pixels(&format!("http://{}/?script=joints:off", s.addr));
+    let b = page(&s);
+    b.wait_for("the joints drawn", || {
+        (b.attribute("joint-count", "data-drawn").as_deref() == Some("31")).then_some(())
+    });
+    assert_eq!(b.text("joint-count"), "31");
+    assert!(b.is_selected("show-joints"));
+    let on = joint_pixels(&b);
+    b.click("show-joints");
+    b.wait_for("the joints hidden", || {
+        (b.attribute("joint-count", "data-drawn").as_deref() == Some("0")).then_some(())
+    });
+    let off = joint_pixels(&b);
     assert!(on > off + 200, "joints drawn: {on} cyan pixels with, {off} without");
-    let dom = chromium(&format!("http://{}/?script=joints:off", s.addr), "--dump-dom", 3000);
-    assert_eq!(attribute(element(&dom, "joint-count").0, "data-drawn").as_deref(), Some("0"));
 
     // A scene without joints draws none and leaves the box unticked.
     let s = start("scenes/box-drop.ron");
-    let dom = chromium(&format!("http://{}/", s.addr), "--dump-dom", 3000);
-    assert_eq!(element(&dom, "joint-count").1, "0");
-    assert!(!element(&dom, "show-joints").0.contains("checked"), "{}", element(&dom, "show-joints").0);
+    b.open(&format!("http://{}/", s.addr));
+    assert_eq!(b.text("joint-count"), "0");
+    assert!(!b.is_selected("show-joints"));
 }
 
 #[test]
-#[ignore = "needs Chromium: .ci/run installs it and runs these"]
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
 fn contacts_are_drawn_on_demand() {
     let s = start("scenes/box-drop.ron");
-    let dom = chromium(&format!("http://{}/?script=step:120", s.addr), "--dump-dom", 3000);
-    assert_eq!(attribute(element(&dom, "show-contacts").0, "data-drawn").as_deref(), Some("0"));
-    let dom = chromium(&format!("http://{}/?script=contacts:on", s.addr), "--dump-dom", 3000);
-    let drawn: u32 =
-        attribute(element(&dom, "show-contacts").0, "data-drawn").and_then(|d| d.parse().ok()).expect("data-drawn");
-    assert!(drawn >= 1, "{}", element(&dom, "show-contacts").0);
+    let b = page(&s);
+    b.click("play");
+    // The box lands after about half a second.
+    b.wait_for("the box to land", || (page_time(&b).1 >= 90).then_some(()));
+    b.click("pause");
+    assert_eq!(b.attribute("show-contacts", "data-drawn").as_deref(), Some("0"));
+    b.click("show-contacts");
+    let drawn: u32 = b.wait_for("contacts drawn", || {
+        b.attribute("show-contacts", "data-drawn").and_then(|d| d.parse().ok()).filter(|&d| d >= 1)
+    });
+    assert!(drawn >= 1);
 }

@@ -25,15 +25,20 @@ fn frames(s: &Studio, n: u32) -> (f64, usize) {
     (start.elapsed().as_secs_f64() * 1e3 / f64::from(n), bytes)
 }
 
-/// Runs headless Chromium on `url` for `seconds` of real time and returns the page's
-/// `studio-fps` console lines (`?log=1`).
-fn page_fps(url: &str, seconds: u32) -> Vec<String> {
+/// The two ways to reach SwiftShader compared in one run: the GL flag the browser tests use, and
+/// ANGLE's SwiftShader Vulkan backend named directly.
+const GL_PATHS: [(&str, &str); 2] = [("--use-gl=swiftshader", "use-gl"), ("--use-angle=swiftshader", "use-angle")];
+
+/// Runs headless Chromium on `url` for `seconds` of real time with SwiftShader reached by
+/// `gl_flag` and returns the page's `studio-fps` console lines (`?log=1`).
+fn page_fps(url: &str, seconds: u32, gl_flag: &str) -> Vec<String> {
     let profile = tempfile::tempdir().expect("temp dir");
     let binary = std::env::var("CHROMIUM").unwrap_or_else(|_| "chromium".to_string());
     let mut child = Command::new("timeout")
         .arg(seconds.to_string())
         .arg(binary)
-        .args(CHROMIUM_FLAGS)
+        .args(CHROMIUM_FLAGS.iter().filter(|f| !f.starts_with("--use-gl=")))
+        .arg(gl_flag)
         .args(["--window-size=1000,700", "--enable-logging=stderr", "--v=0"])
         .arg(format!("--user-data-dir={}", profile.path().display()))
         .arg(url)
@@ -86,18 +91,20 @@ fn studio_at_4000_bodies() {
     let sps = get(&s, "/api/state?actors=0")["steps_per_second"].as_f64().unwrap_or(f64::NAN);
     println!("playing at 1x: {playing_ms:.3} ms a request, {sps:.1} steps/s (real time: 60)");
 
-    let lines = page_fps(&format!("http://{}/?log=1", s.addr), 20);
-    for l in &lines {
-        println!("  {l}");
+    for (flag, label) in GL_PATHS {
+        let lines = page_fps(&format!("http://{}/?log=1", s.addr), 20, flag);
+        for l in &lines {
+            println!("  {label}: {l}");
+        }
+        let sps = get(&s, "/api/state?actors=0")["steps_per_second"].as_f64().unwrap_or(f64::NAN);
+        // The first seconds load the page and the meshes.
+        let settled: Vec<&String> = lines.iter().skip(3).collect();
+        assert!(!settled.is_empty(), "the page reported no frame rate with {flag}: {lines:?}");
+        let drawn = median(settled.iter().map(|l| field(l, "drawn")).collect());
+        let fetched = median(settled.iter().map(|l| field(l, "frames")).collect());
+        println!(
+            "page, headless Chromium ({flag} --enable-unsafe-swiftshader, 1000x700), playing: median \
+             {drawn:.1} frames drawn/s, {fetched:.1} new states/s; server meanwhile {sps:.1} steps/s"
+        );
     }
-    let sps = get(&s, "/api/state?actors=0")["steps_per_second"].as_f64().unwrap_or(f64::NAN);
-    // The first seconds load the page and the meshes.
-    let settled: Vec<&String> = lines.iter().skip(3).collect();
-    assert!(!settled.is_empty(), "the page reported no frame rate: {lines:?}");
-    let drawn = median(settled.iter().map(|l| field(l, "drawn")).collect());
-    let fetched = median(settled.iter().map(|l| field(l, "frames")).collect());
-    println!(
-        "page, headless Chromium (swiftshader, 1000x700), playing: median {drawn:.1} frames drawn/s, \
-         {fetched:.1} new states/s; server meanwhile {sps:.1} steps/s"
-    );
 }

@@ -6,6 +6,8 @@ use std::net::TcpStream;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
+pub mod webdriver;
+
 /// A running studio; killed when dropped, also when a test fails.
 pub struct Studio {
     child: Child,
@@ -48,27 +50,65 @@ pub fn start(scene: &str) -> Studio {
     studio
 }
 
-/// One request; returns the status and the body.
+/// One request to the studio; returns the status and the body.
 pub fn request(studio: &Studio, method: &str, path: &str, body: &[u8]) -> (u16, Vec<u8>) {
-    let mut stream = TcpStream::connect(&studio.addr).expect("connect");
-    stream.set_read_timeout(Some(Duration::from_secs(20))).expect("timeout");
+    http(&studio.addr, method, path, body)
+}
+
+/// One HTTP/1.1 request to `addr` (`host:port`); returns the status and the body.
+pub fn http(addr: &str, method: &str, path: &str, body: &[u8]) -> (u16, Vec<u8>) {
+    try_http(addr, method, path, body, Duration::from_secs(60))
+        .unwrap_or_else(|e| panic!("{method} http://{addr}{path}: {e}"))
+}
+
+/// As `http`, but an error instead of a panic (for destructors).
+pub fn try_http(addr: &str, method: &str, path: &str, body: &[u8], wait: Duration) -> std::io::Result<(u16, Vec<u8>)> {
+    let mut stream = TcpStream::connect(addr)?;
+    stream.set_read_timeout(Some(wait))?;
     let head = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\nContent-Length: {}\r\n\r\n",
-        studio.addr,
+        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n",
         body.len()
     );
-    stream.write_all(head.as_bytes()).expect("write");
-    stream.write_all(body).expect("write");
+    stream.write_all(head.as_bytes())?;
+    stream.write_all(body)?;
+    // chromedriver keeps the connection open whatever the request says: read up to
+    // Content-Length when there is one, else to the end.
     let mut response = Vec::new();
-    stream.read_to_end(&mut response).expect("read");
-    let split = response.windows(4).position(|w| w == b"\r\n\r\n").expect("headers end");
+    let mut buffer = [0u8; 65536];
+    let (split, length) = loop {
+        let n = stream.read(&mut buffer)?;
+        if n == 0 {
+            return Err(std::io::Error::other("the connection closed before the headers ended"));
+        }
+        response.extend_from_slice(&buffer[..n]);
+        if let Some(split) = response.windows(4).position(|w| w == b"\r\n\r\n") {
+            let head = String::from_utf8_lossy(&response[..split]).to_ascii_lowercase();
+            let length = head.lines().find_map(|l| l.strip_prefix("content-length:")?.trim().parse::<usize>().ok());
+            break (split, length);
+        }
+    };
+    match length {
+        Some(length) => {
+            while response.len() < split + 4 + length {
+                let n = stream.read(&mut buffer)?;
+                if n == 0 {
+                    break;
+                }
+                response.extend_from_slice(&buffer[..n]);
+            }
+        }
+        None => {
+            stream.read_to_end(&mut response)?;
+        }
+    }
     let head = String::from_utf8_lossy(&response[..split]).to_string();
-    let status = head.split(' ').nth(1).and_then(|s| s.parse().ok()).expect("status");
+    let status =
+        head.split(' ').nth(1).and_then(|s| s.parse().ok()).ok_or_else(|| std::io::Error::other("no status"))?;
     let body = response[split + 4..].to_vec();
     if head.to_ascii_lowercase().contains("transfer-encoding: chunked") {
-        (status, unchunk(&body))
+        Ok((status, unchunk(&body)))
     } else {
-        (status, body)
+        Ok((status, body))
     }
 }
 

@@ -1,16 +1,7 @@
 // rigid studio: draws the running scene from /api/meshes (once per scene version) and
 // /api/frame (7 little-endian f32 per actor: position, quaternion x y z w), and drives the
-// JSON API (docs/studio.md). URL parameters, for scripts and tests:
-//   ?play=1                       start playing once loaded
-//   ?script=add-box,step:5,...    run actions in order once loaded: play, pause, reset,
-//                                 step:N, add-box, add-sphere, add-cylinder, untick:NAME,
-//                                 tick:NAME, wait:MS, select:NAME (as a click on it),
-//                                 click:FX/FY (a click at fractions of the viewport),
-//                                 edit:FIELD=VALUE (mass, restitution, friction or velocity
-//                                 as "x y z"; posted at once), save (fetch /api/scene into
-//                                 body[data-saved]), joints:on|off (draw the joints or not),
-//                                 contacts:on|off (draw the last step's contacts or not),
-//                                 scene:RON-TEXT (last: it may hold commas)
+// JSON API (docs/studio.md). URL parameters: ?play=1 starts playing once loaded; ?log=1
+// writes the frame rates to the console each second (tests/studio_fps.rs reads them).
 
 import * as THREE from './three.module.min.js';
 import { OrbitControls } from './OrbitControls.js';
@@ -99,7 +90,11 @@ contactLines.frustumCulled = false;
 contactLines.visible = false;
 scene.add(contactLines);
 
-// Per (mesh, fixed) group: one InstancedMesh; for actor i, groupOf[i] = [group, instance].
+// Per (mesh, fixed) group: one merged mesh that draws every member, each vertex carrying its
+// member's index and the poses read from a float texture in the vertex shader; and an
+// InstancedMesh, never drawn, that the pointer's ray is tested against. For actor i,
+// groupOf[i] = [group, member]. (SwiftShader draws one call of many triangles several times
+// faster than the same triangles as instances; BENCH.md, issue #21.)
 let groups = [];
 let groupOf = [];
 let version = -1;
@@ -107,6 +102,7 @@ let lastFrame = null;
 let fitted = '';
 let sceneName = '';
 let loadingMeshes = false;
+const POSE_WIDTH = 2048;
 
 function flatGeometry(mesh) {
   const g = new THREE.BufferGeometry();
@@ -118,12 +114,63 @@ function flatGeometry(mesh) {
   return flat;
 }
 
+// `count` copies of `geometry`, each vertex tagged with its copy's index, coloured per copy.
+function mergedGeometry(geometry, members, coloured) {
+  const p = geometry.getAttribute('position').array;
+  const n = geometry.getAttribute('normal').array;
+  const v = p.length / 3;
+  const count = members.length;
+  const position = new Float32Array(p.length * count);
+  const normal = new Float32Array(n.length * count);
+  const body = new Float32Array(v * count);
+  const color = coloured ? new Float32Array(p.length * count) : null;
+  const c = new THREE.Color();
+  members.forEach((a, k) => {
+    position.set(p, k * p.length);
+    normal.set(n, k * n.length);
+    body.fill(k, k * v, (k + 1) * v);
+    if (color) {
+      c.setRGB(a.colour[0] / 255, a.colour[1] / 255, a.colour[2] / 255, THREE.SRGBColorSpace);
+      for (let j = 0; j < v; j++) color.set([c.r, c.g, c.b], (k * v + j) * 3);
+    }
+  });
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(position, 3));
+  g.setAttribute('normal', new THREE.BufferAttribute(normal, 3));
+  g.setAttribute('body', new THREE.BufferAttribute(body, 1));
+  if (color) g.setAttribute('color', new THREE.BufferAttribute(color, 3));
+  return g;
+}
+
+// A Lambert material whose vertex shader places each vertex by its member's pose (two texels:
+// position, then the quaternion x y z w).
+function posedMaterial(options, poses) {
+  const material = new THREE.MeshLambertMaterial(options);
+  material.onBeforeCompile = (shader) => {
+    shader.uniforms.poses = { value: poses };
+    shader.vertexShader = shader.vertexShader
+      .replace('#include <common>', `#include <common>
+attribute float body;
+uniform highp sampler2D poses;
+vec3 turn(vec4 q, vec3 v) { return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v); }
+vec4 poseTexel(int i) { return texelFetch(poses, ivec2(i % ${POSE_WIDTH}, i / ${POSE_WIDTH}), 0); }`)
+      .replace('#include <beginnormal_vertex>', `vec4 bodyAt = poseTexel(int(body) * 2);
+vec4 bodyTurn = poseTexel(int(body) * 2 + 1);
+vec3 objectNormal = turn(bodyTurn, normal);`)
+      .replace('#include <begin_vertex>', 'vec3 transformed = turn(bodyTurn, position) + bodyAt.xyz;');
+  };
+  return material;
+}
+
 async function loadMeshes() {
   loadingMeshes = true;
   try {
     const m = await api('/api/meshes');
     for (const g of groups) {
-      scene.remove(g.object);
+      scene.remove(g.draw);
+      g.draw.geometry.dispose();
+      g.draw.material.dispose();
+      g.poses.dispose();
       g.object.dispose();
     }
     const geometries = m.meshes.map(flatGeometry);
@@ -137,20 +184,17 @@ async function loadMeshes() {
     });
     groups = [...byKey.values()];
     for (const g of groups) {
+      const rows = Math.ceil((g.members.length * 2) / POSE_WIDTH);
+      g.poses = new THREE.DataTexture(new Float32Array(POSE_WIDTH * rows * 4), POSE_WIDTH, rows, THREE.RGBAFormat, THREE.FloatType);
+      g.poses.needsUpdate = true;
       const material = g.fixed
-        ? new THREE.MeshLambertMaterial({ color: 0xa0a0a8, transparent: true, opacity: 0.35, depthWrite: false })
-        : new THREE.MeshLambertMaterial({ color: 0xffffff });
+        ? posedMaterial({ color: 0xa0a0a8, transparent: true, opacity: 0.35, depthWrite: false }, g.poses)
+        : posedMaterial({ color: 0xffffff, vertexColors: true }, g.poses);
+      g.draw = new THREE.Mesh(mergedGeometry(geometries[g.mesh], g.members, !g.fixed), material);
+      g.draw.frustumCulled = false;
+      scene.add(g.draw);
       g.object = new THREE.InstancedMesh(geometries[g.mesh], material, g.members.length);
-      g.object.instanceMatrix.setUsage(THREE.DynamicDrawUsage);
       g.object.frustumCulled = false;
-      if (!g.fixed) {
-        const c = new THREE.Color();
-        g.members.forEach((a, k) => {
-          c.setRGB(a.colour[0] / 255, a.colour[1] / 255, a.colour[2] / 255, THREE.SRGBColorSpace);
-          g.object.setColorAt(k, c);
-        });
-      }
-      scene.add(g.object);
     }
     setJoints(m.joints || []);
     version = m.version;
@@ -168,14 +212,30 @@ function applyFrame(f) {
   const n = Math.min(groupOf.length, f.length / 7);
   for (let i = 0; i < n; i++) {
     const [g, k] = groupOf[i];
+    const d = g.poses.image.data;
+    d[8 * k] = f[7 * i];
+    d[8 * k + 1] = f[7 * i + 1];
+    d[8 * k + 2] = f[7 * i + 2];
+    d[8 * k + 4] = f[7 * i + 3];
+    d[8 * k + 5] = f[7 * i + 4];
+    d[8 * k + 6] = f[7 * i + 5];
+    d[8 * k + 7] = f[7 * i + 6];
+  }
+  for (const g of groups) g.poses.needsUpdate = true;
+  placeJoints(f);
+  dirty = true;
+}
+
+// The pick meshes' instances where the bodies are in `f` (done on a click, not every frame).
+function placePickMeshes(f) {
+  const n = Math.min(groupOf.length, f.length / 7);
+  for (let i = 0; i < n; i++) {
+    const [g, k] = groupOf[i];
     pos.set(f[7 * i], f[7 * i + 1], f[7 * i + 2]);
     quat.set(f[7 * i + 3], f[7 * i + 4], f[7 * i + 5], f[7 * i + 6]);
     m4.compose(pos, quat, one);
     g.object.setMatrixAt(k, m4);
   }
-  for (const g of groups) g.object.instanceMatrix.needsUpdate = true;
-  placeJoints(f);
-  dirty = true;
 }
 
 function setJoints(list) {
@@ -646,6 +706,7 @@ $('save').onclick = async () => {
 
 // The actor under a viewport point (free bodies before fixed ones), or null.
 function pickActor(ray) {
+  if (lastFrame) placePickMeshes(lastFrame);
   const objects = groups.map((g) => g.object);
   // Instances move every frame: refresh the bounds the raycast first tests against.
   for (const o of objects) o.computeBoundingSphere();
@@ -687,57 +748,12 @@ function clickAt(fx, fy) {
 
 // ---- start ----------------------------------------------------------------------------------
 
-async function runScript(list) {
-  for (const item of list) {
-    const [what, arg] = item.split(':');
-    try {
-      if (what === 'play' || what === 'pause' || what === 'reset') await control({ action: what });
-      else if (what === 'step') await control({ action: 'step', steps: Number(arg || 1) });
-      else if (shapes[what]) await addActor(shapes[what]);
-      else if (what === 'scene') await api('/api/scene', item.slice('scene:'.length), false).then(pollState);
-      else if (what === 'untick' || what === 'tick') {
-        const box = document.querySelector(`[data-testid="system-${arg}"]`);
-        if (box) { box.checked = what === 'tick'; await postSchedule(); }
-      } else if (what === 'joints') {
-        $('show-joints').checked = arg !== 'off';
-        $('show-joints').dispatchEvent(new Event('change'));
-      } else if (what === 'contacts') {
-        $('show-contacts').checked = arg !== 'off';
-        await fetchContacts();
-      } else if (what === 'wait') await new Promise((r) => setTimeout(r, Number(arg || 100)));
-      else if (what === 'select') await select(arg || null);
-      else if (what === 'click') {
-        const [fx, fy] = (arg || '0.5/0.5').split('/').map(Number);
-        await clickAt(fx, fy);
-      }
-      else if (what === 'edit') {
-        const [field, value] = (arg || '').split('=');
-        if (!fields.includes(field)) {
-          showError(`edit: unknown field '${field}'; valid: ${fields.join(', ')}`);
-          continue;
-        }
-        $(`actor-${field}`).value = value ?? '';
-        await applyEdit([field]);
-      } else if (what === 'save') document.body.dataset.saved = await saveScene();
-      // Let clicks' requests finish before the next action.
-      await new Promise((r) => setTimeout(r, 50));
-    } catch (_) { /* shown in the error element */ }
-  }
-  document.body.dataset.script = 'done';
-}
-
 async function start() {
   await pollState();
   await fetchFrame();
   requestAnimationFrame(animate);
   setInterval(() => pollState().catch(() => {}), 500);
-  const raw = params.get('script') || '';
-  // `scene:` takes the rest of the script, commas and all.
-  const at = raw.startsWith('scene:') ? 0 : raw.indexOf(',scene:') + 1;
-  const script = (at > 0 || raw.startsWith('scene:') ? raw.slice(0, Math.max(at - 1, 0)) : raw).split(',').filter(Boolean);
-  if (at > 0 || raw.startsWith('scene:')) script.push(raw.slice(at));
-  if (params.get('play') === '1') script.unshift('play');
-  await runScript(script);
+  if (params.get('play') === '1') await control({ action: 'play' }).catch(() => {});
 }
 
 start().catch((e) => showError(`cannot start: ${e.message}`));
