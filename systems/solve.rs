@@ -295,9 +295,7 @@ fn remember(ctx: &mut StepContext) {
             anchors: anchors[held.pair as usize],
             tangent: t1 * j1 + t2 * j2,
             twist: n * jw,
-            found: (!near[held.pair as usize])
-                .then(|| pairs[held.pair as usize].contact().map(|c| c.feature))
-                .flatten(),
+            found: pairs[held.pair as usize].contact().filter(|_| !near[held.pair as usize]).map(|c| c.feature),
             ..CachedManifold::default()
         };
         for j in 0..usize::from(held.len) {
