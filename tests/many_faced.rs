@@ -82,7 +82,7 @@ fn recycled_pairs_skip_the_tests_without_changing_a_bit() {
     // docs/physics.md §6.3: `solve` reads nothing of the tests' contact for a pair it recycles
     // but the feature, which the skipped pair keeps. Icospheres and a box pyramid, with the
     // tests run on every pair (`unskip`) and without: the same states and the same counts.
-    let run = |scene: BenchScene, n: usize, steps: u64, all: bool| {
+    let run = |scene: BenchScene, n: u32, steps: u64, all: bool| {
         let mut sim = scene_sim(scene, n, 3);
         if all {
             let unskip = rigid_sandbox::System { name: "unskip", run: unskip };
