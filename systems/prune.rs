@@ -10,6 +10,8 @@ use crate::model::mesh::MeshTable;
 use crate::sim::bodies::Bodies;
 use crate::sim::context::Params;
 use crate::sim::context::StepContext;
+use crate::solver::SolveScratch;
+use crate::systems::solve::recycled_state;
 use hecs::World;
 use rayon::prelude::*;
 
@@ -189,9 +191,12 @@ fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
 /// pairs are tested from their poses (`boxes_separated_by`) before anything is posed; the rest
 /// by `separated` on posed meshes.
 ///
-/// - Reads: `ctx.pairs` (`Candidate` only), `ctx.bodies`, `ctx.meshes`, `ctx.posed`.
-/// - Writes: `ctx.pairs` (removes separated pairs, keeps order; `Candidate` → `Near`),
-///   `ctx.posed`.
+/// Last, the resting pairs whose points `solve` will recycle skip the tests (`skip_recycled`).
+///
+/// - Reads: `ctx.pairs` (`Candidate` only), `ctx.bodies`, `ctx.meshes`, `ctx.posed`, `solve`'s
+///   warm-start cache.
+/// - Writes: `ctx.pairs` (removes separated pairs, keeps order; `Candidate` → `Near`, and for
+///   recycled pairs → `Found`), `ctx.posed`.
 /// - Paper: none (an early-out before the detection tests of "Collision Detection").
 /// - Cost: O(1) per box pair; otherwise O(V_A + V_B) per axis tried, at most
 ///   1 + P_A + P_B + 64 axes per pair, with early exits.
@@ -245,6 +250,42 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     touching.extend(pairs.iter().filter(|p| p.is_candidate()).filter(many).map(|p| (p.a, p.b)));
     let scratch = ctx.scratch.get_mut::<PruneScratch>();
     (scratch.speculative, scratch.touching) = (speculative, touching);
+    skip_recycled(ctx);
+}
+
+/// Takes the pairs whose points `solve` will recycle out of the paper's tests: each is given
+/// the verdict the tests gave when they last ran on it (`solve::recycled_state`), which is all
+/// `solve` reads of them there, so its results are the same bits (docs/physics.md §6.3). Only
+/// pairs `solve` holds, and only while its warm-start cache is last step's.
+fn skip_recycled(ctx: &mut StepContext) {
+    let last_step = |s: &SolveScratch| s.step + 1 == ctx.step && !s.cache.is_empty();
+    if !ctx.scratch.get::<SolveScratch>().is_some_and(last_step) {
+        return;
+    }
+    let mut cached = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().cached);
+    let Some(solve) = ctx.scratch.get::<SolveScratch>() else { return };
+    // Each pair's entry in the cache: both lists are in pair order, so one merge.
+    let (cache, mut at) = (&solve.cache, 0);
+    cached.clear();
+    for pair in &ctx.pairs {
+        let key = (pair.a, pair.b);
+        while at < cache.len() && cache[at].0 < key {
+            at += 1;
+        }
+        cached.push(if at < cache.len() && cache[at].0 == key { at as u32 } else { u32::MAX });
+    }
+    let (b, meshes, params, dt) = (&ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
+    let rows = ctx.pairs.par_iter_mut().zip(cached.par_iter());
+    rows.filter(|(p, entry)| **entry != u32::MAX && p.is_candidate()).for_each(|(pair, &entry)| {
+        let (ia, ib) = (pair.a as usize, pair.b as usize);
+        if params.resting_contacts(dt, b.pair_friction(ia, ib)) {
+            let thin = b.thinner(meshes, ia, ib);
+            if let Some(state) = recycled_state(&cache[entry as usize].1, b, thin, ia, ib) {
+                pair.state = state;
+            }
+        }
+    });
+    ctx.scratch.get_mut::<PruneScratch>().cached = cached;
 }
 
 /// Steps between GJK tests of a pair with a many-faced body that GJK could not prove apart
@@ -261,6 +302,8 @@ struct PruneScratch {
     speculative: Vec<Scalar>,
     /// The pairs with a many-faced body not proved apart last step, sorted.
     touching: Vec<(u32, u32)>,
+    /// Scratch of `skip_recycled`: each pair's index in `solve`'s cache (`u32::MAX`: none).
+    cached: Vec<u32>,
 }
 
 #[cfg(test)]

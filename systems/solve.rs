@@ -152,6 +152,30 @@ fn find_manifolds(ctx: &mut StepContext) {
     });
 }
 
+/// The state a resting pair takes instead of the detection tests' verdict when `solve` will
+/// recycle its points (`entry`'s anchors are `still`) and a test found it last time, else `None`: `solve` then
+/// reads nothing of the tests' contact but its feature, so `prune` skips the tests and the pair
+/// keeps the feature they gave when they last ran (docs/physics.md §6.3). The contact is the
+/// recycled manifold's deepest point, the one `solve` puts in its place.
+pub(super) fn recycled_state(
+    entry: &CachedManifold,
+    b: &Bodies,
+    thin: Scalar,
+    ia: usize,
+    ib: usize,
+) -> Option<PairState> {
+    // A pair no test found last time (held as near) is tested again, to see it touch.
+    let feature = entry.found?;
+    let old = &entry.anchors;
+    if old.len == 0 || !still(old, b, ia, ib, RECYCLE_DISTANCE * thin) {
+        return None;
+    }
+    let m = placed(old, b, ia, ib);
+    let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y])).unwrap_or(0);
+    let normal = b.rotation[ia] * old.normal;
+    Some(PairState::Found(Contact { point: m.points[deepest], normal, depth: -m.gaps[deepest], feature }))
+}
+
 /// True when B has moved, relative to A, by less than `distance` [m] since `g` was found: the
 /// shift of its centre plus the arc its rotation sweeps at its bounding radius.
 fn still(g: &ContactAnchors, b: &Bodies, ia: usize, ib: usize, distance: Scalar) -> bool {
@@ -260,7 +284,7 @@ fn remember(ctx: &mut StepContext) {
     }
     s.by_pair.retain(|&h| h != u32::MAX);
     // Written in parallel: a serial part of the step waits for both threads.
-    let (held, pairs, groups, anchors) = (&s.held, &s.pairs, &s.groups, &s.anchors);
+    let (held, pairs, groups, anchors, near) = (&s.held, &s.pairs, &s.groups, &s.anchors, &s.near);
     let entry = |&h: &u32| {
         let held = &held[h as usize];
         let group = &groups[usize::from(held.group)];
@@ -271,6 +295,7 @@ fn remember(ctx: &mut StepContext) {
             anchors: anchors[held.pair as usize],
             tangent: t1 * j1 + t2 * j2,
             twist: n * jw,
+            found: pairs[held.pair as usize].contact().filter(|_| !near[held.pair as usize]).map(|c| c.feature),
             ..CachedManifold::default()
         };
         for j in 0..usize::from(held.len) {

@@ -4,6 +4,7 @@
 //! solver and sleeping carry from one step to the next (the warm-start cache, how long each
 //! body has been still); JSON floats are written shortest-round-trip and read back exactly.
 
+use crate::collision::contact::Feature;
 use crate::collision::manifold::MAX_POINTS;
 use crate::math::{Quat, Vector};
 use crate::model::components::{Pose, Velocity};
@@ -53,6 +54,10 @@ pub struct ContactSnapshot {
     pub tangent: [f64; 3],
     /// Twist impulse about the normal, world frame [N·m·s].
     pub twist: [f64; 3],
+    /// The test that last found the pair (`face`, `vertex`, `edge`; absent: none did), which
+    /// it keeps while its points are recycled (docs/physics.md §6.3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub found: Option<String>,
 }
 
 /// The `sleep` system's state (`step::SleepState`), one entry per actor.
@@ -237,6 +242,7 @@ impl ContactSnapshot {
             impulses: c.normal[..g.len].to_vec(),
             tangent: c.tangent.to_array(),
             twist: c.twist.to_array(),
+            found: c.found.map(|f| f.name().to_string()),
         }
     }
 
@@ -264,9 +270,19 @@ impl ContactSnapshot {
             len,
             ..ContactAnchors::default()
         };
+        let found = match self.found.as_deref() {
+            None => None,
+            Some(name) => Some(
+                Feature::ALL
+                    .into_iter()
+                    .find(|f| f.name() == name)
+                    .ok_or_else(|| format!("found: '{name}' is not face, vertex or edge"))?,
+            ),
+        };
         let mut entry = CachedManifold {
             tangent: Vector::from_array(self.tangent),
             twist: Vector::from_array(self.twist),
+            found,
             ..CachedManifold::default()
         };
         for k in 0..len {

@@ -2,7 +2,7 @@
 //! warm-start cache (each pair's recycled points and impulses), the one part of it that lives
 //! from one step to the next (snapshots carry it).
 
-use crate::collision::contact::Pair;
+use crate::collision::contact::{Feature, Pair};
 use crate::collision::manifold::{MAX_POINTS, Manifold};
 use crate::math::{Mat3, Quat, Scalar, Vector};
 use crate::solver::{Batch, PointRows, SolverBody};
@@ -77,6 +77,10 @@ pub struct CachedManifold {
     pub tangent: Vector,
     /// Twist impulse about the normal, world frame [N·m·s].
     pub twist: Vector,
+    /// The test that found the pair the last time the tests ran on it (`None`: none did, it
+    /// was held as near). A pair that keeps its points skips the tests and keeps this verdict
+    /// (`prune`, docs/physics.md §6.3), so the counts by test still count it.
+    pub found: Option<Feature>,
 }
 
 /// Reused buffers of the contact solver (`solve`), and its warm-start cache, the one piece of
