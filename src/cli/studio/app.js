@@ -32,10 +32,20 @@ async function api(path, body, json = true) {
 
 // ---- three.js scene ----------------------------------------------------------------------
 
+function softwareRenderer() {
+  const gl = document.createElement('canvas').getContext('webgl2');
+  const info = gl?.getExtension('WEBGL_debug_renderer_info');
+  const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : '';
+  gl?.getExtension('WEBGL_lose_context')?.loseContext();
+  return /swiftshader|llvmpipe|softpipe|software/i.test(name);
+}
+
 const canvas = $('viewport');
 let renderer = null;
 try {
-  renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+  // A software renderer (SwiftShader, llvmpipe) pays for multisampling on the processor: there it
+  // halves the frame rate of a 4 000-body scene (BENCH.md), so edges stay sharp-stepped instead.
+  renderer = new THREE.WebGLRenderer({ canvas, antialias: !softwareRenderer(), preserveDrawingBuffer: true });
   renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
 } catch (e) {
   showError(`WebGL is not available: ${e.message}`);
@@ -54,7 +64,8 @@ controls?.addEventListener('change', () => {
   // The joints' crosses keep their size on screen as the camera moves.
   if (lastFrame) placeJoints(lastFrame);
 });
-scene.add(new THREE.HemisphereLight(0xffffff, 0x445566, 1.6));
+const hemi = new THREE.HemisphereLight(0xffffff, 0x445566, 1.6);
+scene.add(hemi);
 const sun = new THREE.DirectionalLight(0xffffff, 1.8);
 sun.position.set(5, 10, 7);
 scene.add(sun);
@@ -114,52 +125,135 @@ function flatGeometry(mesh) {
   return flat;
 }
 
-// `count` copies of `geometry`, each vertex tagged with its copy's index, coloured per copy.
-function mergedGeometry(geometry, members, coloured) {
-  const p = geometry.getAttribute('position').array;
-  const n = geometry.getAttribute('normal').array;
-  const v = p.length / 3;
-  const count = members.length;
-  const position = new Float32Array(p.length * count);
-  const normal = new Float32Array(n.length * count);
-  const body = new Float32Array(v * count);
-  const color = coloured ? new Float32Array(p.length * count) : null;
-  const c = new THREE.Color();
-  members.forEach((a, k) => {
-    position.set(p, k * p.length);
-    normal.set(n, k * n.length);
-    body.fill(k, k * v, (k + 1) * v);
-    if (color) {
-      c.setRGB(a.colour[0] / 255, a.colour[1] / 255, a.colour[2] / 255, THREE.SRGBColorSpace);
-      for (let j = 0; j < v; j++) color.set([c.r, c.g, c.b], (k * v + j) * 3);
+// A box centred on its body's origin and aligned with its body's axes shows the camera at most
+// one face of each pair: drawn as the three faces on the + side of its axes, each turned half a
+// turn onto its opposite in the vertex shader when the camera is on that side (`FACING`), it
+// gives the same picture with half the triangles. Its half extents, or null for another mesh.
+function boxHalfExtents(mesh) {
+  const v = mesh.vertices;
+  if (v.length !== 24 || mesh.triangles.length !== 36) return null;
+  const h = [Math.abs(v[0]), Math.abs(v[1]), Math.abs(v[2])];
+  const corners = new Set();
+  for (let i = 0; i < 8; i++) {
+    let key = 0;
+    for (let k = 0; k < 3; k++) {
+      const x = v[3 * i + k];
+      if (!(h[k] > 0) || Math.abs(Math.abs(x) - h[k]) > 1e-6 * h[k]) return null;
+      key |= (x > 0 ? 1 : 0) << k;
+    }
+    corners.add(key);
+  }
+  return corners.size === 8 ? h : null;
+}
+
+function facingBoxGeometry([hx, hy, hz]) {
+  // Per axis the + face as two triangles wound outwards: corners in order a b c d.
+  const faces = [
+    [[hx, -hy, -hz], [hx, hy, -hz], [hx, hy, hz], [hx, -hy, hz]],
+    [[-hx, hy, -hz], [-hx, hy, hz], [hx, hy, hz], [hx, hy, -hz]],
+    [[-hx, -hy, hz], [hx, -hy, hz], [hx, hy, hz], [-hx, hy, hz]],
+  ];
+  const position = [];
+  const normal = [];
+  const axis = [];
+  faces.forEach((f, k) => {
+    for (const c of [f[0], f[1], f[2], f[0], f[2], f[3]]) {
+      position.push(...c);
+      normal.push(k === 0 ? 1 : 0, k === 1 ? 1 : 0, k === 2 ? 1 : 0);
+      axis.push(k);
     }
   });
   const g = new THREE.BufferGeometry();
-  g.setAttribute('position', new THREE.BufferAttribute(position, 3));
-  g.setAttribute('normal', new THREE.BufferAttribute(normal, 3));
-  g.setAttribute('body', new THREE.BufferAttribute(body, 1));
-  if (color) g.setAttribute('color', new THREE.BufferAttribute(color, 3));
+  g.setAttribute('position', new THREE.Float32BufferAttribute(position, 3));
+  g.setAttribute('normal', new THREE.Float32BufferAttribute(normal, 3));
+  g.setAttribute('axis', new THREE.Float32BufferAttribute(axis, 1));
   return g;
 }
 
-// A Lambert material whose vertex shader places each vertex by its member's pose (two texels:
-// position, then the quaternion x y z w).
-function posedMaterial(options, poses) {
-  const material = new THREE.MeshLambertMaterial(options);
-  material.onBeforeCompile = (shader) => {
-    shader.uniforms.poses = { value: poses };
-    shader.vertexShader = shader.vertexShader
-      .replace('#include <common>', `#include <common>
-attribute float body;
+// `count` copies of `geometry`, each vertex tagged with its copy's index, coloured per copy.
+function mergedGeometry(geometry, members, coloured) {
+  const v = geometry.getAttribute('position').count;
+  const count = members.length;
+  const g = new THREE.BufferGeometry();
+  for (const [name, a] of Object.entries(geometry.attributes)) {
+    const out = new Float32Array(a.array.length * count);
+    for (let k = 0; k < count; k++) out.set(a.array, k * a.array.length);
+    g.setAttribute(name, new THREE.BufferAttribute(out, a.itemSize));
+  }
+  const body = new Float32Array(v * count);
+  members.forEach((_, k) => body.fill(k, k * v, (k + 1) * v));
+  g.setAttribute('body', new THREE.BufferAttribute(body, 1));
+  if (coloured) {
+    const color = new Float32Array(v * 3 * count);
+    const c = new THREE.Color();
+    members.forEach((a, k) => {
+      c.setRGB(a.colour[0] / 255, a.colour[1] / 255, a.colour[2] / 255, THREE.SRGBColorSpace);
+      for (let j = 0; j < v; j++) color.set([c.r, c.g, c.b], (k * v + j) * 3);
+    });
+    g.setAttribute('color', new THREE.BufferAttribute(color, 3));
+  }
+  return g;
+}
+
+// Lambert light (three.js's formula for these two lights) worked out per vertex, each vertex
+// placed by its member's pose (two texels: position, then the quaternion x y z w). The faces are
+// flat (a vertex carries its face's normal) and a hemisphere and a sun light by the normal only,
+// so this draws what MeshLambertMaterial draws, in a shader short enough to hold `FACING`.
+function posedMaterial({ color, opacity = 1, vertexColors = false, facing = false }, poses) {
+  const scaled = (c, k) => c.clone().multiplyScalar(k);
+  return new THREE.ShaderMaterial({
+    uniforms: {
+      poses: { value: poses },
+      tint: { value: new THREE.Color(color) },
+      opacity: { value: opacity },
+      sky: { value: scaled(hemi.color, hemi.intensity) },
+      ground: { value: scaled(hemi.groundColor, hemi.intensity) },
+      up: { value: hemi.position.clone().normalize() },
+      sunColor: { value: scaled(sun.color, sun.intensity) },
+      sunDir: { value: sun.position.clone().sub(sun.target.position).normalize() },
+    },
+    defines: facing ? { FACING: '' } : {},
+    vertexColors,
+    transparent: opacity < 1,
+    depthWrite: opacity >= 1,
+    vertexShader: `attribute float body;
+#ifdef FACING
+attribute float axis;
+#endif
 uniform highp sampler2D poses;
+uniform vec3 tint, sky, ground, up, sunColor, sunDir;
+varying vec3 lit;
 vec3 turn(vec4 q, vec3 v) { return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v); }
-vec4 poseTexel(int i) { return texelFetch(poses, ivec2(i % ${POSE_WIDTH}, i / ${POSE_WIDTH}), 0); }`)
-      .replace('#include <beginnormal_vertex>', `vec4 bodyAt = poseTexel(int(body) * 2);
-vec4 bodyTurn = poseTexel(int(body) * 2 + 1);
-vec3 objectNormal = turn(bodyTurn, normal);`)
-      .replace('#include <begin_vertex>', 'vec3 transformed = turn(bodyTurn, position) + bodyAt.xyz;');
-  };
-  return material;
+vec4 poseTexel(int i) { return texelFetch(poses, ivec2(i % ${POSE_WIDTH}, i / ${POSE_WIDTH}), 0); }
+void main() {
+  vec4 at = poseTexel(int(body) * 2);
+  vec4 q = poseTexel(int(body) * 2 + 1);
+  vec3 local = position;
+  vec3 nl = normal;
+#ifdef FACING
+  vec3 eye = turn(vec4(-q.xyz, q.w), cameraPosition - at.xyz);
+  // Half a turn about the next axis takes the + face onto the - face, still wound outwards.
+  if (axis < 0.5) { if (eye.x < 0.0) { local.xz = -local.xz; nl.xz = -nl.xz; } }
+  else if (axis < 1.5) { if (eye.y < 0.0) { local.xy = -local.xy; nl.xy = -nl.xy; } }
+  else if (eye.z < 0.0) { local.yz = -local.yz; nl.yz = -nl.yz; }
+#endif
+  vec3 n = normalize(turn(q, nl));
+  vec3 base = tint;
+#ifdef USE_COLOR
+  base *= color;
+#endif
+  vec3 irradiance = mix(ground, sky, 0.5 * dot(n, up) + 0.5) + max(dot(n, sunDir), 0.0) * sunColor;
+  lit = base * irradiance * 0.3183098861837907;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(turn(q, local) + at.xyz, 1.0);
+}`,
+    fragmentShader: `uniform float opacity;
+varying vec3 lit;
+void main() {
+  gl_FragColor = vec4(lit, opacity);
+#include <tonemapping_fragment>
+#include <colorspace_fragment>
+}`,
+  });
 }
 
 async function loadMeshes() {
@@ -187,10 +281,13 @@ async function loadMeshes() {
       const rows = Math.ceil((g.members.length * 2) / POSE_WIDTH);
       g.poses = new THREE.DataTexture(new Float32Array(POSE_WIDTH * rows * 4), POSE_WIDTH, rows, THREE.RGBAFormat, THREE.FloatType);
       g.poses.needsUpdate = true;
+      const box = boxHalfExtents(m.meshes[g.mesh]);
+      const facing = box !== null;
       const material = g.fixed
-        ? posedMaterial({ color: 0xa0a0a8, transparent: true, opacity: 0.35, depthWrite: false }, g.poses)
-        : posedMaterial({ color: 0xffffff, vertexColors: true }, g.poses);
-      g.draw = new THREE.Mesh(mergedGeometry(geometries[g.mesh], g.members, !g.fixed), material);
+        ? posedMaterial({ color: 0xa0a0a8, opacity: 0.35, facing }, g.poses)
+        : posedMaterial({ color: 0xffffff, vertexColors: true, facing }, g.poses);
+      const drawn = facing ? facingBoxGeometry(box) : geometries[g.mesh];
+      g.draw = new THREE.Mesh(mergedGeometry(drawn, g.members, !g.fixed), material);
       g.draw.frustumCulled = false;
       scene.add(g.draw);
       g.object = new THREE.InstancedMesh(geometries[g.mesh], material, g.members.length);
