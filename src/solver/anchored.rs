@@ -52,21 +52,31 @@ impl Wide3 {
     }
 }
 
-/// The field `pick` of the bodies in `slot[..len]` (zero in the other lanes).
+/// The two fields `pick` gives of the bodies in `slot[..len]` (zero in the other lanes), each
+/// body read once; a full batch with the count known, so its loop unrolls.
 #[inline(always)]
 fn gather<B: BodyStore + ?Sized>(
     bodies: &B,
     slot: &[u32; LANES],
     len: usize,
-    pick: impl Fn(&SolverBody) -> Vector,
-) -> Wide3 {
-    let mut out = [[0.0; LANES]; 3];
-    for l in 0..len {
-        let v = pick(bodies.body(slot[l]));
-        (out[0][l], out[1][l], out[2][l]) = (v.x, v.y, v.z);
+    pick: impl Fn(&SolverBody) -> [Vector; 2],
+) -> [Wide3; 2] {
+    let mut out = [[[0.0; LANES]; 3]; 2];
+    let mut read = |l: usize| {
+        for (side, v) in out.iter_mut().zip(pick(bodies.body(slot[l]))) {
+            (side[0][l], side[1][l], side[2][l]) = (v.x, v.y, v.z);
+        }
+    };
+    if len == LANES {
+        for l in 0..LANES {
+            read(l);
+        }
+    } else {
+        for l in 0..len {
+            read(l);
+        }
     }
-    let [x, y, z] = out.map(Reg::new);
-    Wide3 { x, y, z }
+    out.map(|[x, y, z]| Wide3 { x: Reg::new(x), y: Reg::new(y), z: Reg::new(z) })
 }
 
 /// One anchored joint, before it takes its lane.
@@ -160,7 +170,7 @@ impl Anchored {
     /// `Geometry::new` place it).
     #[inline]
     pub fn refresh<B: BodyStore + ?Sized>(&mut self, bodies: &B) {
-        let (dx, dq) = (gather(bodies, &self.slot, self.len, |b| b.dx), gather(bodies, &self.slot, self.len, |b| b.dq));
+        let [dx, dq] = gather(bodies, &self.slot, self.len, |b| [b.dx, b.dq]);
         let s = self.scale;
         let theta = s[0].times(dq.x).plus(s[1].times(dq.y)).plus(s[2].times(dq.z));
         let (tx, ty, tz) = (theta.x.to_array(), theta.y.to_array(), theta.z.to_array());
@@ -187,8 +197,7 @@ impl Anchored {
     /// One pass: λ = `mass_scale` K⁻¹(−J v − `bias_rate` C) − `impulse_scale` λ_acc, applied.
     #[inline]
     pub fn pass<B: BodyStore + ?Sized>(&mut self, bodies: &mut B, [bias_rate, mass_scale, impulse_scale]: [Scalar; 3]) {
-        let (mut v, mut w) =
-            (gather(bodies, &self.slot, self.len, |b| b.v), gather(bodies, &self.slot, self.len, |b| b.w));
+        let [mut v, mut w] = gather(bodies, &self.slot, self.len, |b| [b.v, b.w]);
         let bias = Reg::splat(bias_rate);
         let speed = [v.x + self.g[0].dot(w), v.y + self.g[1].dot(w), v.z + self.g[2].dot(w)];
         let x = solve3(&self.factor, [0, 1, 2].map(|i| -(speed[i] + bias * self.error[i])));
@@ -205,8 +214,7 @@ impl Anchored {
     /// Re-applies the accumulated impulses.
     #[inline]
     pub fn warm<B: BodyStore + ?Sized>(&self, bodies: &mut B) {
-        let (mut v, mut w) =
-            (gather(bodies, &self.slot, self.len, |b| b.v), gather(bodies, &self.slot, self.len, |b| b.w));
+        let [mut v, mut w] = gather(bodies, &self.slot, self.len, |b| [b.v, b.w]);
         self.push(&mut v, &mut w, self.acc);
         self.scatter(bodies, v, w);
     }
@@ -227,9 +235,19 @@ impl Anchored {
     #[inline(always)]
     fn scatter<B: BodyStore + ?Sized>(&self, bodies: &mut B, v: Wide3, w: Wide3) {
         let [vx, vy, vz, wx, wy, wz] = [v.x, v.y, v.z, w.x, w.y, w.z].map(|r| r.to_array());
-        for l in 0..self.len {
+        let mut write = |l: usize| {
             let b = bodies.body_mut(self.slot[l]);
             (b.v, b.w) = (Vector::new(vx[l], vy[l], vz[l]), Vector::new(wx[l], wy[l], wz[l]));
+        };
+        // A full batch with the count known, so the loop unrolls.
+        if self.len == LANES {
+            for l in 0..LANES {
+                write(l);
+            }
+        } else {
+            for l in 0..self.len {
+                write(l);
+            }
         }
     }
 
