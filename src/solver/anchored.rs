@@ -135,34 +135,37 @@ impl Anchored {
     /// turned by the identity, so nothing in them divides by zero).
     pub fn new(lanes: &[AnchoredJoint]) -> Self {
         debug_assert!((1..=LANES).contains(&lanes.len()));
-        let one = |idle: Scalar, f: &dyn Fn(&AnchoredJoint) -> Scalar| {
-            let mut x = [idle; LANES];
-            x.iter_mut().zip(lanes).for_each(|(x, j)| *x = f(j));
-            Reg::new(x)
-        };
-        let each = |f: &dyn Fn(&AnchoredJoint) -> Vector| Wide3 {
-            x: one(0.0, &|j| f(j).x),
-            y: one(0.0, &|j| f(j).y),
-            z: one(0.0, &|j| f(j).z),
-        };
-        let (mut joints, mut slot) = ([u32::MAX; LANES], [0; LANES]);
+        let (mut joints, mut slot, mut inv_mass) = ([u32::MAX; LANES], [0; LANES], [0.0; LANES]);
+        // Vectors by field and component, lane by lane: S's three columns, x0, the two anchors,
+        // the impulses; and the orientation, an idle lane's the identity.
+        let mut v = [[[0.0; LANES]; 3]; 7];
+        let mut q0 = [[0.0; LANES], [0.0; LANES], [0.0; LANES], [1.0; LANES]];
         for (l, j) in lanes.iter().enumerate() {
-            (joints[l], slot[l]) = (j.joint, j.end.slot);
+            (joints[l], slot[l], inv_mass[l]) = (j.joint, j.end.slot, j.end.inv_mass);
+            let s = j.end.scale;
+            let acc = Vector::from_array(j.acc);
+            for (field, x) in v.iter_mut().zip([s.x_axis, s.y_axis, s.z_axis, j.end.x0, j.anchor, j.pivot, acc]) {
+                (field[0][l], field[1][l], field[2][l]) = (x.x, x.y, x.z);
+            }
+            let q = j.end.q0;
+            (q0[0][l], q0[1][l], q0[2][l], q0[3][l]) = (q.x, q.y, q.z, q.w);
         }
+        let [c0, c1, c2, x0, anchor, pivot, acc] =
+            v.map(|[x, y, z]| Wide3 { x: Reg::new(x), y: Reg::new(y), z: Reg::new(z) });
         Self {
             joints,
             slot,
             len: lanes.len(),
-            inv_mass: one(0.0, &|j| j.end.inv_mass),
-            scale: [0, 1, 2].map(|c| each(&|j| j.end.scale.col(c))),
-            x0: each(&|j| j.end.x0),
-            q0: [0, 1, 2, 3].map(|c| one(if c == 3 { 1.0 } else { 0.0 }, &|j| j.end.q0.to_array()[c])),
-            anchor: each(&|j| j.anchor),
-            pivot: each(&|j| j.pivot),
+            inv_mass: Reg::new(inv_mass),
+            scale: [c0, c1, c2],
+            x0,
+            q0: q0.map(Reg::new),
+            anchor,
+            pivot,
             g: [Wide3::default(); 3],
             error: [Reg::ZERO; 3],
             factor: [Reg::ZERO; 6],
-            acc: [0, 1, 2].map(|k| one(0.0, &|j| j.acc[k])),
+            acc: [acc.x, acc.y, acc.z],
         }
     }
 
