@@ -63,9 +63,12 @@ pub fn solve(_world: &mut World, ctx: &mut StepContext) {
         s.held.clear();
         return;
     }
+    // Each jointed actor once, in order of first mention, marked by actor (a search of the
+    // list so far was quadratic in the joints).
     s.jointed.clear();
+    let mut seen = vec![false; ctx.bodies.len()];
     for i in joints.joints.iter().flat_map(|j| std::iter::once(j.a).chain(j.b)) {
-        if !s.jointed.contains(&i) {
+        if !std::mem::replace(&mut seen[i as usize], true) {
             s.jointed.push(i);
         }
     }

@@ -10,6 +10,7 @@
 //! (points, locked rotations, rods) are solved together, exactly (`JointSystem`); the others
 //! one joint after another, before them.
 
+use super::anchored::{Anchored, AnchoredJoint};
 use super::joint_system::{MAX_ROWS, ScaledRow};
 use super::joints::{Frame, Geometry, Joint, JointImpulses, JointKind, Joints};
 use super::{BodyStore, SolverBody};
@@ -46,7 +47,7 @@ pub(crate) struct End {
 
 impl End {
     /// The end's pose after the substeps done so far (as `solve` will place it).
-    fn frame(&self, body: &SolverBody) -> Frame {
+    pub(super) fn frame(&self, body: &SolverBody) -> Frame {
         if self.free {
             (self.x0 + body.dx, (exp_map(self.scale * body.dq) * self.q0).normalize())
         } else {
@@ -281,10 +282,11 @@ pub(crate) fn joint_pass<B: BodyStore + ?Sized>(bodies: &mut B, joints: &mut Joi
         JointPass::Solve => Soft::new(JOINT_HERTZ_PER_SUBSTEP_RATE / h, JOINT_DAMPING_RATIO, h),
         JointPass::Warm | JointPass::Relax => Soft::RIGID,
     };
-    let Joints { joints: list, impulses, ends, geometry, system, mixed, .. } = joints;
+    let Joints { joints: list, impulses, ends, geometry, system, anchored, limited, mixed, .. } = joints;
     let mut one_by_one_rows = |bodies: &mut B| {
-        for (k, joint) in list.iter().enumerate().filter(|(_, j)| one_by_one(&j.kind)) {
-            let (imp, g) = (&mut impulses[k], &geometry[k]);
+        for &k in limited.iter() {
+            let k = k as usize;
+            let (joint, imp, g) = (&list[k], &mut impulses[k], &geometry[k]);
             let mut pair = Pair { bodies: &mut *bodies, ends: ends[k] };
             match pass {
                 JointPass::Warm => warm(&mut pair, joint, g, imp),
@@ -293,16 +295,26 @@ pub(crate) fn joint_pass<B: BodyStore + ?Sized>(bodies: &mut B, joints: &mut Joi
         }
     };
     one_by_one_rows(bodies);
+    // The anchored joints share no moving body with any other joint: where they go among
+    // the others changes nothing.
     match pass {
-        JointPass::Warm => system.warm(bodies),
+        JointPass::Warm => {
+            anchored.iter().for_each(|a| a.warm(bodies));
+            system.warm(bodies);
+        }
         JointPass::Solve | JointPass::Relax => {
-            system.pass(bodies, [soft.bias_rate, soft.mass_scale, soft.impulse_scale]);
+            let rates = [soft.bias_rate, soft.mass_scale, soft.impulse_scale];
+            let mut equality_rows = |bodies: &mut B| {
+                anchored.iter_mut().for_each(|a| a.pass(bodies, rates));
+                system.pass(bodies, rates);
+            };
+            equality_rows(bodies);
             // Limits and the equality rows push against each other (a door stopped by its
             // limit needs the hinge's point to stop its centre): a second round lets them
             // agree, or the hit comes back as a rebound.
             if *mixed {
                 one_by_one_rows(bodies);
-                system.pass(bodies, [soft.bias_rate, soft.mass_scale, soft.impulse_scale]);
+                equality_rows(bodies);
             }
         }
     }
@@ -311,13 +323,14 @@ pub(crate) fn joint_pass<B: BodyStore + ?Sized>(bodies: &mut B, joints: &mut Joi
 /// The joints' geometry and equality rows at the bodies' current poses, K factorised, and the
 /// accumulated impulses carried over to the new rows.
 fn refresh<B: BodyStore + ?Sized>(bodies: &B, joints: &mut Joints) {
-    store_impulses(joints);
-    let Joints { joints: list, impulses, ends, geometry, system, carry, spans, .. } = joints;
-    geometry.clear();
-    geometry.extend(list.iter().zip(ends.iter()).map(|(joint, ends)| {
-        let [a, b] = ends.map(|e| e.frame(bodies.body(e.slot)));
-        Geometry::new(joint, a, b)
-    }));
+    carry_impulses(joints);
+    let Joints { joints: list, impulses, ends, geometry, system, carry, spans, anchored, general, .. } = joints;
+    for &k in general.iter() {
+        let k = k as usize;
+        let [a, b] = ends[k].map(|e| e.frame(bodies.body(e.slot)));
+        geometry[k] = Geometry::new(&list[k], a, b);
+    }
+    anchored.iter_mut().for_each(|a| a.refresh(bodies));
     for &(k, first, len) in spans.iter() {
         let (joint, imp, e) = (&list[k], &impulses[k], &ends[k]);
         // Gathered first and written in one place, so the writing is inlined (a callback per
@@ -344,6 +357,15 @@ fn refresh<B: BodyStore + ?Sized>(bodies: &B, joints: &mut Joints) {
 /// Keeps the equality rows' accumulated impulses in the joints' `JointImpulses` (world
 /// vectors), which outlive the rows: the next rows, turned a little, start from them.
 pub(crate) fn store_impulses(joints: &mut Joints) {
+    carry_impulses(joints);
+    for a in &joints.anchored {
+        a.store(&mut joints.impulses);
+    }
+}
+
+/// `store_impulses` for the joints of the system (an anchored joint's rows stay on the world
+/// axes, so its impulses stay in its rows).
+fn carry_impulses(joints: &mut Joints) {
     if !joints.rows_valid {
         return;
     }
@@ -465,11 +487,41 @@ pub(crate) fn prepare(
         End { slot: world, free: false, inv_mass: 0.0, scale: Mat3::ZERO, x0: Vector::ZERO, q0: Quat::IDENTITY };
     joints.ends.clear();
     joints.ends.extend(joints.joints.iter().map(|j| [end(j.a), j.b.map_or(world, end)]));
-    joints.impulses.resize(joints.joints.len(), JointImpulses::default());
-    joints.system.set_nodes(&joints.ends, joints.joints.iter().map(|j| equality_count(&j.kind)));
-    joints.spans.clear();
-    joints.spans.extend(joints.system.spans().map(|(k, r)| (k, r.start, r.len())));
-    joints.carry.resize(joints.system.rows.len(), Carry::Axial);
-    joints.mixed = joints.joints.iter().any(|j| one_by_one(&j.kind));
+    arrange(joints, true);
+}
+
+/// Sorts the joints, their ends set, into anchored ones (`anchored`, when `write_out`), those
+/// of the system and those with one-by-one rows, for a new step.
+pub(super) fn arrange(joints: &mut Joints, write_out: bool) {
+    let n = joints.joints.len();
+    joints.impulses.resize(n, JointImpulses::default());
+    joints.geometry.resize(n, Geometry::default());
+    let Joints { joints: list, impulses, ends, anchored, general, limited, system, spans, carry, mixed, .. } =
+        &mut *joints;
+    anchored.clear();
+    general.clear();
+    // How many joints hold each free body: an anchored joint must be its body's only one.
+    let free = |e: &End| e.free.then_some(e.slot as usize);
+    let top = ends.iter().flatten().filter_map(free).max().map_or(0, |s| s + 1);
+    let mut held = vec![0u32; top];
+    ends.iter().flatten().filter_map(free).for_each(|s| held[s] += 1);
+    let (mut lone, mut rows) = (Vec::new(), Vec::with_capacity(n));
+    for (k, joint) in list.iter().enumerate() {
+        let alone = write_out && ends[k].iter().filter_map(free).all(|s| held[s] == 1);
+        match AnchoredJoint::of(k, joint, ends[k], &impulses[k]).filter(|_| alone) {
+            Some(a) => lone.push(a),
+            None => general.push(k as u32),
+        }
+        // An anchored joint's rows are not the system's.
+        rows.push(if lone.last().is_some_and(|a| a.joint == k as u32) { 0 } else { equality_count(&joint.kind) });
+    }
+    anchored.extend(lone.chunks(super::LANES).map(Anchored::new));
+    limited.clear();
+    limited.extend((0..n as u32).filter(|&k| one_by_one(&list[k as usize].kind)));
+    system.set_nodes(ends, rows.into_iter());
+    spans.clear();
+    spans.extend(system.spans().map(|(k, r)| (k, r.start, r.len())));
+    carry.resize(system.rows.len(), Carry::Axial);
+    *mixed = !limited.is_empty();
     (joints.stale, joints.rows_valid) = (true, false);
 }

@@ -24,11 +24,11 @@ use std::collections::{BTreeSet, BinaryHeap, HashMap};
 pub(crate) const MAX_ROWS: usize = 6;
 
 /// A dense block of at most `MAX_ROWS` × `MAX_ROWS`, row-major with that stride.
-type Block = [Scalar; MAX_ROWS * MAX_ROWS];
+pub(super) type Block = [Scalar; MAX_ROWS * MAX_ROWS];
 
 /// A pivot below this fraction of its row's own K_ii is a row the others already fix (or a
 /// degenerate one): it is dropped, so a redundant joint neither fails nor pushes twice.
-const DROP: Scalar = 1e-12;
+pub(super) const DROP: Scalar = 1e-12;
 
 /// One equality row in the solver's scaled coordinates: the speed it measures is
 /// lin·(v_a − v_b) + g_a·ŵ_a − g_b·ŵ_b, with g = S (r × n) (or S u for a rotation).
@@ -481,7 +481,7 @@ fn apply<B: BodyStore + ?Sized>(bodies: &mut B, [ea, eb]: &[End; 2], row: &Scale
 /// LDLᵀ of the symmetric `m` × `m` block `a` (its lower triangle), in place: L below the
 /// diagonal, 1/d on it, a dropped pivot (`DROP`) as 0 with its column of L.
 #[inline(always)]
-fn ldl(a: &mut Block, m: usize) {
+pub(super) fn ldl(a: &mut Block, m: usize) {
     let mut d = [0.0; MAX_ROWS];
     for j in 0..m {
         let own = a[j * MAX_ROWS + j];
@@ -499,7 +499,7 @@ fn ldl(a: &mut Block, m: usize) {
 
 /// Solves D x = `x` in place with D factorised by `ldl`.
 #[inline(always)]
-fn ldl_solve(f: &Block, m: usize, x: &mut [Scalar; MAX_ROWS]) {
+pub(super) fn ldl_solve(f: &Block, m: usize, x: &mut [Scalar; MAX_ROWS]) {
     for i in 0..m {
         x[i] -= (0..i).map(|k| f[i * MAX_ROWS + k] * x[k]).sum::<Scalar>();
     }

@@ -172,7 +172,7 @@ impl Joint {
 }
 
 /// A joint's state at given poses, in world coordinates.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub(crate) struct Geometry {
     /// The anchor's lever from A's centre.
     pub r_a: Vector,
@@ -247,6 +247,11 @@ pub struct Joints {
     pub(crate) system: super::joint_system::JointSystem,
     pub(crate) carry: Vec<super::joint_pass::Carry>,
     pub(crate) spans: Vec<(usize, usize, usize)>,
+    /// The lone ball joints to a fixed end, solved apart four at a time (`anchored`), in scene
+    /// order; the other joints; those with rows solved one joint at a time (limits, motors...).
+    pub(crate) anchored: Vec<super::anchored::Anchored>,
+    pub(crate) general: Vec<u32>,
+    pub(crate) limited: Vec<u32>,
     /// The bodies moved since the last refresh; the rows hold impulses not yet stored.
     pub(crate) stale: bool,
     pub(crate) rows_valid: bool,

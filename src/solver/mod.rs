@@ -27,6 +27,7 @@
 
 use crate::math::{Scalar, Vector};
 
+mod anchored;
 mod constraints;
 mod drive;
 mod joint_pass;
