@@ -92,15 +92,15 @@ struct Motion {
     normal_dx: Reg,
 }
 
-/// The lanes' (A, B) bodies' two fields picked by `pick`, as register vectors (`[end][field]`):
-/// one look-up of each slot serves both fields, halving the slot bounds checks.
+/// The lanes' (A, B) bodies' `N` fields picked by `pick`, as register vectors (`[end][field]`):
+/// one look-up of each slot serves every field, so each slot is bounds-checked once.
 #[inline(always)]
-fn gather<B: BodyStore + ?Sized>(
+fn gather<B: BodyStore + ?Sized, const N: usize>(
     bodies: &B,
     batch: &Batch,
-    pick: impl Fn(&super::SolverBody) -> [crate::math::Vector; 2],
-) -> [[RegVec; 2]; 2] {
-    let mut out = [[[[0.0; LANES]; 3]; 2]; 2];
+    pick: impl Fn(&super::SolverBody) -> [crate::math::Vector; N],
+) -> [[RegVec; N]; 2] {
+    let mut out = [[[[0.0; LANES]; 3]; N]; 2];
     for end in 0..2 {
         for l in 0..LANES {
             for (field, v) in pick(bodies.body(batch.slot[end][l])).into_iter().enumerate() {
@@ -111,11 +111,23 @@ fn gather<B: BodyStore + ?Sized>(
     out.map(|e| e.map(|[x, y, z]| RegVec { x: Reg::new(x), y: Reg::new(y), z: Reg::new(z) }))
 }
 
+/// The lanes' velocities and motion of a batch in one gather (a sweep that works the gaps out).
+#[inline(always)]
+fn open_moved<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> (Motion, LaneBodies) {
+    let [[va, wa, xa, dqa], [vb, wb, xb, dqb]] = gather(bodies, batch, |b| [b.v, b.w, b.dx, b.dq]);
+    (Motion::new(xa, xb, dqa, dqb, batch), LaneBodies::new(va, wa, vb, wb, batch))
+}
+
 impl LaneBodies {
     /// Loads the velocities of the bodies of a batch's lanes.
     #[inline(always)]
     fn open<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
         let [[va, wa], [vb, wb]] = gather(bodies, batch, |b| [b.v, b.w]);
+        Self::new(va, wa, vb, wb, batch)
+    }
+
+    #[inline(always)]
+    fn new(va: RegVec, wa: RegVec, vb: RegVec, wb: RegVec, batch: &Batch) -> Self {
         let u = va.minus(vb).dot(RegVec::load(&batch.normal));
         Self { va, wa, vb, wb, u, pending: Reg::ZERO }
     }
@@ -175,10 +187,10 @@ impl LaneBodies {
 }
 
 impl Motion {
-    /// Loads how far the substeps have moved the bodies of a batch's lanes.
+    /// How far the substeps have moved the bodies of a batch's lanes, from their
+    /// displacements `xa`, `xb` and turns `dqa`, `dqb`.
     #[inline(always)]
-    fn open<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
-        let [[xa, dqa], [xb, dqb]] = gather(bodies, batch, |b| [b.dx, b.dq]);
+    fn new(xa: RegVec, xb: RegVec, dqa: RegVec, dqb: RegVec, batch: &Batch) -> Self {
         let normal_dx = xa.minus(xb).dot(RegVec::load(&batch.normal));
         Self { dqa, dqb, normal_dx }
     }
@@ -237,9 +249,13 @@ pub fn sweep<B: BodyStore + ?Sized>(
     fresh: bool,
 ) {
     for batch in batches {
-        let motion = fresh.then(|| Motion::open(bodies, batch));
+        let (motion, mut lane_bodies) = if fresh {
+            let (motion, lane_bodies) = open_moved(bodies, batch);
+            (Some(motion), lane_bodies)
+        } else {
+            (None, LaneBodies::open(bodies, batch))
+        };
         let motion = motion.as_ref();
-        let mut lane_bodies = LaneBodies::open(bodies, batch);
         let batch_points = points_of(batch, points);
         // Points go in pairs (0, 1), (2, 3): a manifold's diagonals (`manifold::reduce`).
         if soft.is_none() {
