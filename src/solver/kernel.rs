@@ -92,29 +92,42 @@ struct Motion {
     normal_dx: Reg,
 }
 
-/// The lanes' (A, B) bodies' fields picked by `pick`, as two register vectors.
+/// The lanes' (A, B) bodies' `N` fields picked by `pick`, as register vectors (`[end][field]`):
+/// one look-up of each slot serves every field, so each slot is bounds-checked once.
 #[inline(always)]
-fn gather<B: BodyStore + ?Sized>(
+fn gather<B: BodyStore + ?Sized, const N: usize>(
     bodies: &B,
     batch: &Batch,
-    pick: impl Fn(&super::SolverBody) -> crate::math::Vector,
-) -> [RegVec; 2] {
-    let mut out = [[[0.0; LANES]; 3]; 2];
+    pick: impl Fn(&super::SolverBody) -> [crate::math::Vector; N],
+) -> [[RegVec; N]; 2] {
+    let mut out = [[[[0.0; LANES]; 3]; N]; 2];
     for end in 0..2 {
         for l in 0..LANES {
-            let v = pick(bodies.body(batch.slot[end][l]));
-            (out[end][0][l], out[end][1][l], out[end][2][l]) = (v.x, v.y, v.z);
+            for (field, v) in pick(bodies.body(batch.slot[end][l])).into_iter().enumerate() {
+                (out[end][field][0][l], out[end][field][1][l], out[end][field][2][l]) = (v.x, v.y, v.z);
+            }
         }
     }
-    out.map(|[x, y, z]| RegVec { x: Reg::new(x), y: Reg::new(y), z: Reg::new(z) })
+    out.map(|e| e.map(|[x, y, z]| RegVec { x: Reg::new(x), y: Reg::new(y), z: Reg::new(z) }))
+}
+
+/// The lanes' velocities and motion of a batch in one gather (a sweep that works the gaps out).
+#[inline(always)]
+fn open_moved<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> (Motion, LaneBodies) {
+    let [[va, wa, xa, dqa], [vb, wb, xb, dqb]] = gather(bodies, batch, |b| [b.v, b.w, b.dx, b.dq]);
+    (Motion::new(xa, xb, dqa, dqb, batch), LaneBodies::new(va, wa, vb, wb, batch))
 }
 
 impl LaneBodies {
     /// Loads the velocities of the bodies of a batch's lanes.
     #[inline(always)]
     fn open<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
-        let [va, vb] = gather(bodies, batch, |b| b.v);
-        let [wa, wb] = gather(bodies, batch, |b| b.w);
+        let [[va, wa], [vb, wb]] = gather(bodies, batch, |b| [b.v, b.w]);
+        Self::new(va, wa, vb, wb, batch)
+    }
+
+    #[inline(always)]
+    fn new(va: RegVec, wa: RegVec, vb: RegVec, wb: RegVec, batch: &Batch) -> Self {
         let u = va.minus(vb).dot(RegVec::load(&batch.normal));
         Self { va, wa, vb, wb, u, pending: Reg::ZERO }
     }
@@ -128,9 +141,7 @@ impl LaneBodies {
         let ends = [(arrays(self.va), arrays(self.wa)), (arrays(self.vb), arrays(self.wb))];
         for (end, (v, w)) in ends.iter().enumerate() {
             for l in 0..LANES {
-                let slot = batch.slot[end][l];
-                if !bodies.is_static(slot) {
-                    let body = bodies.body_mut(slot);
+                if let Some(body) = bodies.moving_mut(batch.slot[end][l]) {
                     body.v = crate::math::Vector::new(v[0][l], v[1][l], v[2][l]);
                     body.w = crate::math::Vector::new(w[0][l], w[1][l], w[2][l]);
                 }
@@ -176,11 +187,10 @@ impl LaneBodies {
 }
 
 impl Motion {
-    /// Loads how far the substeps have moved the bodies of a batch's lanes.
+    /// How far the substeps have moved the bodies of a batch's lanes, from their
+    /// displacements `xa`, `xb` and turns `dqa`, `dqb`.
     #[inline(always)]
-    fn open<B: BodyStore + ?Sized>(bodies: &B, batch: &Batch) -> Self {
-        let [xa, xb] = gather(bodies, batch, |b| b.dx);
-        let [dqa, dqb] = gather(bodies, batch, |b| b.dq);
+    fn new(xa: RegVec, xb: RegVec, dqa: RegVec, dqb: RegVec, batch: &Batch) -> Self {
         let normal_dx = xa.minus(xb).dot(RegVec::load(&batch.normal));
         Self { dqa, dqb, normal_dx }
     }
@@ -239,9 +249,13 @@ pub fn sweep<B: BodyStore + ?Sized>(
     fresh: bool,
 ) {
     for batch in batches {
-        let motion = fresh.then(|| Motion::open(bodies, batch));
+        let (motion, mut lane_bodies) = if fresh {
+            let (motion, lane_bodies) = open_moved(bodies, batch);
+            (Some(motion), lane_bodies)
+        } else {
+            (None, LaneBodies::open(bodies, batch))
+        };
         let motion = motion.as_ref();
-        let mut lane_bodies = LaneBodies::open(bodies, batch);
         let batch_points = points_of(batch, points);
         // Points go in pairs (0, 1), (2, 3): a manifold's diagonals (`manifold::reduce`).
         if soft.is_none() {

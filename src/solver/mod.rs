@@ -69,6 +69,8 @@ pub trait BodyStore {
     fn body_mut(&mut self, slot: u32) -> &mut SolverBody;
     /// True for a static slot: nothing may write it.
     fn is_static(&self, slot: u32) -> bool;
+    /// The body in `slot` to write, or `None` for a static slot (one bounds check for both).
+    fn moving_mut(&mut self, slot: u32) -> Option<&mut SolverBody>;
 }
 
 impl BodyStore for [SolverBody] {
@@ -85,6 +87,12 @@ impl BodyStore for [SolverBody] {
     #[inline(always)]
     fn is_static(&self, slot: u32) -> bool {
         slot as usize == self.len() - 1
+    }
+
+    #[inline(always)]
+    fn moving_mut(&mut self, slot: u32) -> Option<&mut SolverBody> {
+        // The static slot is the last: the slice without it holds exactly the moving slots.
+        self.split_last_mut().and_then(|(_, moving)| moving.get_mut(slot as usize))
     }
 }
 
@@ -114,6 +122,12 @@ impl BodyStore for Sides<'_> {
     fn is_static(&self, slot: u32) -> bool {
         let slot = slot as usize;
         slot == self.left.len() - 1 || slot == self.left.len() + self.right.len() - 1
+    }
+
+    #[inline(always)]
+    fn moving_mut(&mut self, slot: u32) -> Option<&mut SolverBody> {
+        let (slot, n) = (slot as usize, self.left.len());
+        if slot < n { self.left.moving_mut(slot as u32) } else { self.right.moving_mut((slot - n) as u32) }
     }
 }
 
@@ -384,6 +398,10 @@ mod tests {
         assert_eq!(sides.left[1].v, Vector::X);
         let statics: Vec<u32> = (0..5).filter(|&k| sides.is_static(k)).collect();
         assert_eq!(statics, [2, 4], "each side ends with its static slot");
+        let moving: Vec<u32> = (0..5).filter(|&k| sides.moving_mut(k).is_some()).collect();
+        assert_eq!(moving, [0, 1, 3], "only the moving slots can be written");
+        sides.moving_mut(3).unwrap().w = Vector::Z;
+        assert_eq!(sides.right[0].w, Vector::Z);
     }
 
     #[test]
