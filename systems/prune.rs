@@ -10,8 +10,8 @@ use crate::model::mesh::MeshTable;
 use crate::sim::bodies::Bodies;
 use crate::sim::context::Params;
 use crate::sim::context::StepContext;
-use crate::solver::SolveScratch;
-use crate::systems::solve::recycled_state;
+use crate::solver::{Recycling, SolveScratch, cache_entries};
+use crate::systems::solve::{poses, recycled_contact, recycled_points};
 use hecs::World;
 use rayon::prelude::*;
 
@@ -254,37 +254,45 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
 }
 
 /// Takes the pairs whose points `solve` will recycle out of the paper's tests: each is given
-/// the verdict the tests gave when they last ran on it (`solve::recycled_state`), which is all
-/// `solve` reads of them there, so its results are the same bits (docs/physics.md §6.3). Only
-/// pairs `solve` holds, and only while its warm-start cache is last step's.
+/// the verdict the tests gave when they last ran on it and the recycled contact
+/// (`solve::recycled_contact`), which is all `solve` reads of them there, so its results are
+/// the same bits (docs/physics.md §6.3). Only pairs `solve` holds, and only while its
+/// warm-start cache is last step's. Whether each resting pair with a cache entry keeps its
+/// points is worked out here once and left for `solve` (`SolveScratch::recycling`).
 fn skip_recycled(ctx: &mut StepContext) {
-    let last_step = |s: &SolveScratch| s.step + 1 == ctx.step && !s.cache.is_empty();
+    let (step, b, meshes, params, dt) = (ctx.step, &ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
+    let last_step = |s: &SolveScratch| s.step + 1 == step && !s.cache.is_empty();
     if !ctx.scratch.get::<SolveScratch>().is_some_and(last_step) {
         return;
     }
     let mut cached = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().cached);
-    let Some(solve) = ctx.scratch.get::<SolveScratch>() else { return };
-    // Each pair's entry in the cache: both lists are in pair order, so one merge.
-    let (cache, mut at) = (&solve.cache, 0);
-    cached.clear();
-    for pair in &ctx.pairs {
-        let key = (pair.a, pair.b);
-        while at < cache.len() && cache[at].0 < key {
-            at += 1;
-        }
-        cached.push(if at < cache.len() && cache[at].0 == key { at as u32 } else { u32::MAX });
-    }
-    let (b, meshes, params, dt) = (&ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
-    let rows = ctx.pairs.par_iter_mut().zip(cached.par_iter());
-    rows.filter(|(p, entry)| **entry != u32::MAX && p.is_candidate()).for_each(|(pair, &entry)| {
+    let s = ctx.scratch.get_mut::<SolveScratch>();
+    cache_entries(&s.cache, &ctx.pairs, &mut cached);
+    s.recycling_step = step;
+    s.recycling.clear();
+    s.recycling.resize(s.cache.len(), Recycling::default());
+    let open = |p: &Pair| p.is_candidate() || p.is_near();
+    for (pair, &entry) in ctx.pairs.iter().zip(&cached).filter(|(p, e)| **e != u32::MAX && open(p)) {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         if params.resting_contacts(dt, b.pair_friction(ia, ib)) {
-            let thin = b.thinner(meshes, ia, ib);
-            if let Some(state) = recycled_state(&cache[entry as usize].1, b, thin, ia, ib) {
-                pair.state = state;
+            s.recycling[entry as usize].poses = Some(poses(b, ia, ib));
+        }
+    }
+    let (cache, recycling) = (&s.cache, &mut s.recycling);
+    let rows = recycling.par_iter_mut().zip(cache.par_iter());
+    rows.filter(|(r, _)| r.poses.is_some()).for_each(|(r, ((a, b_), entry))| {
+        let (ia, ib) = (*a as usize, *b_ as usize);
+        r.manifold = recycled_points(&entry.anchors, b, b.thinner(meshes, ia, ib), ia, ib);
+    });
+    for (pair, &entry) in ctx.pairs.iter_mut().zip(&cached).filter(|(p, e)| **e != u32::MAX && p.is_candidate()) {
+        let (kept, r) = (&cache[entry as usize].1, &s.recycling[entry as usize]);
+        // A pair no test found last time (held as near) is tested again, to see it touch.
+        if let (Some(feature), Some(m)) = (kept.found, &r.manifold) {
+            if let Some(contact) = recycled_contact(m, &kept.anchors, b, pair.a as usize, feature) {
+                pair.state = PairState::Found(contact);
             }
         }
-    });
+    }
     ctx.scratch.get_mut::<PruneScratch>().cached = cached;
 }
 
