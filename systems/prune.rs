@@ -3,7 +3,7 @@
 //! of them can fire on a pair it removes (proof on `separated`).
 
 use crate::collision::contact::{Pair, PairState};
-use crate::collision::hull::{distance_bound, is_many_faced, lowest_vertex_seeded, proved_apart};
+use crate::collision::hull::{Placed, Shape, distance_bound, is_many_faced, lowest_vertex_seeded, proved_apart};
 use crate::collision::posed::Posed;
 use crate::math::{Mat3, Scalar, Vector};
 use crate::model::mesh::MeshTable;
@@ -70,7 +70,12 @@ fn separated_cheaply(a: &Posed, b: &Posed, margin: Scalar) -> bool {
 /// How far apart the bodies' bounding boxes are along the farthest world axis [m] (negative
 /// when they overlap).
 fn bounds_gap(a: &Posed, b: &Posed) -> Scalar {
-    (b.bounds.0 - a.bounds.1).max(a.bounds.0 - b.bounds.1).max_element()
+    gap_between(a.bounds, b.bounds)
+}
+
+/// `bounds_gap` of two (min, max) boxes.
+fn gap_between(a: (Vector, Vector), b: (Vector, Vector)) -> Scalar {
+    (b.0 - a.1).max(a.0 - b.1).max_element()
 }
 
 /// True when the projections of `a` and `b` on `axis` are more than `margin` apart.
@@ -221,33 +226,54 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
-    ctx.pose_candidates();
-    let (posed, meshes, b, params, dt) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params, ctx.dt);
+    // Small meshes are posed whole; many-faced ones are left unposed (`Placed`): their GJK and
+    // bounds walk the body-frame vertices, and the tests and `solve` pose only the bodies of
+    // the pairs they take (a recycled pair's need none).
+    let (meshes, b) = (&ctx.meshes, &ctx.bodies);
+    let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
+    let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
+    ctx.posed.pose(b, candidates.clone().filter(|&i| !many(i)));
+    let PruneScratch { wanted, bounds, hints, .. } = ctx.scratch.get_mut::<PruneScratch>();
+    let placed = |i: usize| Placed { mesh: meshes.get(b.mesh[i]), position: b.position[i], rotation: b.rotation[i] };
+    (wanted.clear(), wanted.resize(b.len(), false));
+    candidates.filter(|&i| many(i)).for_each(|i| wanted[i as usize] = true);
+    bounds.resize(b.len(), (Vector::ZERO, Vector::ZERO));
+    hints.resize(b.len(), [0; 6]);
+    let rows = bounds.par_iter_mut().zip(hints.par_iter_mut()).zip(wanted.par_iter()).enumerate();
+    rows.filter(|(_, (_, w))| **w).for_each(|(i, ((bounds, hints), _))| {
+        let p = placed(i);
+        hints.iter_mut().filter(|h| **h as usize >= p.mesh.vertices.len()).for_each(|h| *h = 0);
+        *bounds = p.bounds(hints);
+    });
+    let bounds = &*bounds;
+    let (posed, params, dt) = (&ctx.posed, &ctx.params, ctx.dt);
     let margin = |p: &Pair| pair_margin(p, b, meshes, params, (dt, &speculative));
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
+    let shape = |i: u32| if many(i) { Shape::Placed(placed(i as usize)) } else { Shape::Posed(posed.get(i)) };
+    let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };
     ctx.pairs.par_iter_mut().filter(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|pair| {
-        let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
-        let (resting, first) = (touching.binary_search(&(pair.a, pair.b)).is_ok(), u64::from(pair.a));
+        let (ia, ib) = (pair.a, pair.b);
+        let (resting, first) = (touching.binary_search(&(ia, ib)).is_ok(), u64::from(ia));
         classify(pair, margin(pair), |[wide, proof]| {
-            if is_many_faced(pa) || is_many_faced(pb) {
-                let gap = bounds_gap(pa, pb);
+            if many(ia) || many(ib) {
+                let gap = gap_between(bounds_of(ia), bounds_of(ib));
                 if resting && !(step + first).is_multiple_of(RETEST_EVERY) {
                     return [gap > wide, gap <= wide && wide > proof && gap > proof];
                 }
                 // One GJK bound answers both margins (its first direction is the line of
                 // centres, which `separated` tries).
-                let bound = distance_bound(pa, pb, wide).max(gap);
+                let bound = distance_bound(shape(ia), shape(ib), wide).max(gap);
                 return [bound > wide, bound <= wide && wide > proof && bound > proof];
             }
+            let (pa, pb) = (posed.get(ia), posed.get(ib));
             let by_wide = separated(pa, pb, wide);
             [by_wide, !by_wide && wide > proof && separated(pa, pb, proof)]
         });
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
-    let (posed, pairs) = (&ctx.posed, &ctx.pairs);
     touching.clear();
-    let many = |p: &&Pair| is_many_faced(posed.get(p.a)) || is_many_faced(posed.get(p.b));
-    touching.extend(pairs.iter().filter(|p| p.is_candidate()).filter(many).map(|p| (p.a, p.b)));
+    let touches = |p: &&Pair| p.is_candidate() && (many(p.a) || many(p.b));
+    touching.extend(ctx.pairs.iter().filter(touches).map(|p| (p.a, p.b)));
     let scratch = ctx.scratch.get_mut::<PruneScratch>();
     (scratch.speculative, scratch.touching) = (speculative, touching);
     skip_recycled(ctx);
@@ -312,6 +338,13 @@ struct PruneScratch {
     touching: Vec<(u32, u32)>,
     /// Scratch of `skip_recycled`: each pair's index in `solve`'s cache (`u32::MAX`: none).
     cached: Vec<u32>,
+    /// Scratch: body i is a many-faced body of a candidate pair.
+    wanted: Vec<bool>,
+    /// Each such body's world bounds this step (`Placed::bounds`).
+    bounds: Vec<(Vector, Vector)>,
+    /// Each body's extreme vertices along the world axes when last bounded: where the next
+    /// step's walks start (a resting body's are where they end).
+    hints: Vec<[u32; 6]>,
 }
 
 #[cfg(test)]

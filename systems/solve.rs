@@ -69,7 +69,6 @@ pub fn solve(_world: &mut World, ctx: &mut StepContext) {
             s.jointed.push(i);
         }
     }
-    ctx.pose_pairs(open);
     find_manifolds(ctx);
     build_constraints(ctx);
     let s = ctx.scratch.get_mut::<SolveScratch>();
@@ -89,8 +88,9 @@ fn find_manifolds(ctx: &mut StepContext) {
     let s = ctx.scratch.get_mut::<SolveScratch>();
     ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut s.speculative);
     let speculative = &s.speculative;
-    let (posed, meshes, b, params) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params);
+    let (meshes, b, params) = (&ctx.meshes, &ctx.bodies, &ctx.params);
     let margin = params.contact_margin;
+    let reach = |ia: usize, ib: usize, thin: Scalar| margin * thin + speculative[ia] + speculative[ib];
     let n = s.pairs.len();
     s.manifolds.resize(n, Manifold::default());
     s.anchors.resize(n, ContactAnchors::default());
@@ -104,26 +104,37 @@ fn find_manifolds(ctx: &mut StepContext) {
     let judged: &[Recycling] = if s.recycling_step == ctx.step { &s.recycling } else { &[] };
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
     let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter_mut())).zip(cached.par_iter());
-    rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (anchors, recycled)), &entry)| {
+    rows.for_each(|(((pair, m), (anchors, recycled)), &entry)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
-        let reach = margin * thin + speculative[ia] + speculative[ib];
-        let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
         let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.anchors);
         *recycled = false;
         let verdict = judged.get(entry as usize).filter(|v| v.poses == Some(poses(b, ia, ib)));
         let kept = old.and_then(|g| verdict.map_or_else(|| recycled_points(g, b, thin, ia, ib), |v| v.manifold));
         if let (Some(old), Some(kept)) = (old, kept) {
             (*recycled, *anchors, *m) = (true, *old, kept);
+            let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
             match recycled_contact(m, old, b, ia, feature) {
-                Some(c) if -c.depth <= reach => pair.state = PairState::Resolved(c),
+                Some(c) if -c.depth <= reach(ia, ib, thin) => pair.state = PairState::Resolved(c),
                 _ => {
                     m.len = 0;
                     pair.state = PairState::Candidate; // drawn apart
                 }
             }
-            return;
         }
+    });
+    s.recycling.clear();
+    // Only the pairs found afresh need their bodies posed.
+    let fresh = s.pairs.iter().zip(&s.recycled).filter(|(_, r)| !**r).flat_map(|(p, _)| [p.a, p.b]);
+    ctx.posed.pose(b, fresh);
+    let posed = &ctx.posed;
+    let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
+    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter()));
+    rows.filter(|(_, (_, r))| !**r).for_each_init(ClipScratch::default, |scratch, ((pair, m), (anchors, _))| {
+        let (ia, ib) = (pair.a as usize, pair.b as usize);
+        let thin = b.thinner(meshes, ia, ib);
+        let reach = reach(ia, ib, thin);
+        let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
         // Held along the pair's least-overlap axis (see `contact_axis`), touching or a hair
         // apart (speculatively); the tests' own normal and depth decide only that it touches.
@@ -141,7 +152,6 @@ fn find_manifolds(ctx: &mut StepContext) {
         }
         *anchors = fixed_to_bodies(m, axis.normal, b, ia, ib);
     });
-    s.recycling.clear();
 }
 
 /// The points `old` of a pair's cache entry placed at the bodies' current poses when the pair

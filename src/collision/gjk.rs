@@ -2,7 +2,7 @@
 //! between two bodies from support points found by walking vertex neighbours, which proves a
 //! pair apart without testing every face against every vertex.
 
-use crate::collision::hull::{lowest_vertex, lowest_vertex_seeded};
+use crate::collision::hull::{Placed, lowest_vertex, lowest_vertex_seeded};
 use crate::collision::posed::Posed;
 use crate::math::{Scalar, Vector};
 
@@ -34,29 +34,70 @@ impl Simplex {
 /// only costs the tests' time).
 const GJK_ITERATIONS: usize = 64;
 
+/// A body GJK takes support points of: posed (its world vertices at hand) or placed (only
+/// its pose, `hull::Placed`, walking its body-frame vertices). Both give the same vertices.
+#[derive(Clone, Copy)]
+pub enum Shape<'a> {
+    /// World vertices at hand.
+    Posed(&'a Posed),
+    /// A many-faced body left unposed.
+    Placed(Placed<'a>),
+}
+
+impl Shape<'_> {
+    fn centre(&self) -> Vector {
+        match self {
+            Self::Posed(p) => p.position,
+            Self::Placed(p) => p.position,
+        }
+    }
+
+    /// The vertex lowest along `dir` walking from `start`, and its world point.
+    fn lowest(&self, dir: Vector, start: u32) -> (u32, Vector) {
+        match self {
+            Self::Posed(p) => {
+                let i = lowest_vertex(p, dir, start).0;
+                (i, p.vertices[i as usize])
+            }
+            Self::Placed(p) => {
+                let i = p.lowest(dir, start);
+                (i, p.vertex(i))
+            }
+        }
+    }
+
+    fn lowest_seeded(&self, dir: Vector) -> u32 {
+        match self {
+            Self::Posed(p) => lowest_vertex_seeded(p, dir).0,
+            Self::Placed(p) => p.lowest_seeded(dir),
+        }
+    }
+}
+
 /// True when GJK proves `a` and `b` more than `margin` apart: a direction `v` whose support
 /// points bound their distance from below by more than `margin`. `false` when they are within
 /// `margin`, overlap, or no proof came within `GJK_ITERATIONS`.
 #[must_use]
 pub fn proved_apart(a: &Posed, b: &Posed, margin: Scalar) -> bool {
-    distance_bound(a, b, margin) > margin
+    distance_bound(Shape::Posed(a), Shape::Posed(b), margin) > margin
 }
 
 /// A lower bound on the distance between `a` and `b` [m] found by GJK, stopping as soon as it
 /// exceeds `enough` (and 0 when they touch, overlap or come within `enough`).
 #[must_use]
-pub fn distance_bound(a: &Posed, b: &Posed, enough: Scalar) -> Scalar {
+pub fn distance_bound(a: Shape, b: Shape, enough: Scalar) -> Scalar {
     // Support of the Minkowski difference A − B along d: A's highest minus B's lowest.
-    let centre = b.position - a.position;
-    let (mut sa, mut sb) = (lowest_vertex_seeded(a, -centre).0, lowest_vertex_seeded(b, centre).0);
+    let (ca, cb) = (a.centre(), b.centre());
+    let centre = cb - ca;
+    let (mut sa, mut sb) = (a.lowest_seeded(-centre), b.lowest_seeded(centre));
     let mut support = |d: Vector| {
-        let (i, _) = lowest_vertex(a, -d, sa);
-        let (j, _) = lowest_vertex(b, d, sb);
+        let (i, wa) = a.lowest(-d, sa);
+        let (j, wb) = b.lowest(d, sb);
         (sa, sb) = (i, j);
-        a.vertices[i as usize] - b.vertices[j as usize]
+        wa - wb
     };
     let mut simplex = Simplex::default();
-    let mut v = a.position - b.position;
+    let mut v = ca - cb;
     let mut bound: Scalar = 0.0;
     if v == Vector::ZERO {
         return bound;
