@@ -3,7 +3,7 @@
 //! of them can fire on a pair it removes (proof on `separated`).
 
 use crate::collision::contact::{Pair, PairState};
-use crate::collision::hull::{Placed, Shape, distance_bound, is_many_faced, lowest_vertex_seeded, proved_apart};
+use crate::collision::hull::{Placed, Shape, distance_bound_from, is_many_faced, lowest_vertex_seeded, proved_apart};
 use crate::collision::posed::Posed;
 use crate::math::{Mat3, Scalar, Vector};
 use crate::model::mesh::MeshTable;
@@ -170,7 +170,7 @@ fn pair_margin(
 /// Marks `pair` `Separated` when `apart` proves it apart by the wide margin, else `Near` when
 /// it proves it apart by the proof margin (`pair_margin`). `apart([wide, proof])` says whether
 /// it is proved apart by each (the second only asked for when the first fails).
-fn classify(pair: &mut Pair, (wide, proof): (Scalar, Scalar), apart: impl Fn([Scalar; 2]) -> [bool; 2]) {
+fn classify(pair: &mut Pair, (wide, proof): (Scalar, Scalar), mut apart: impl FnMut([Scalar; 2]) -> [bool; 2]) {
     let [by_wide, by_proof] = apart([wide, proof]);
     if by_wide {
         pair.state = PairState::Separated;
@@ -233,9 +233,23 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
     let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
     ctx.posed.pose(b, candidates.clone().filter(|&i| !many(i)));
-    let PruneScratch { wanted, bounds, hints, .. } = ctx.scratch.get_mut::<PruneScratch>();
+    let PruneScratch { wanted, bounds, hints, starts, starts_in, starts_out, .. } =
+        ctx.scratch.get_mut::<PruneScratch>();
+    // Each pair's GJK starts from where last step's first walks ended (its entry in `starts`:
+    // both lists in pair order, one merge).
+    starts_in.clear();
+    starts_out.clear();
+    starts_out.resize(ctx.pairs.len(), None);
+    let mut at = 0;
+    for pair in &ctx.pairs {
+        while at < starts.len() && starts[at].0 < (pair.a, pair.b) {
+            at += 1;
+        }
+        starts_in.push(starts.get(at).filter(|s| s.0 == (pair.a, pair.b)).map(|s| s.1));
+    }
     let placed = |i: usize| Placed { mesh: meshes.get(b.mesh[i]), position: b.position[i], rotation: b.rotation[i] };
-    (wanted.clear(), wanted.resize(b.len(), false));
+    wanted.clear();
+    wanted.resize(b.len(), false);
     candidates.filter(|&i| many(i)).for_each(|i| wanted[i as usize] = true);
     bounds.resize(b.len(), (Vector::ZERO, Vector::ZERO));
     hints.resize(b.len(), [0; 6]);
@@ -251,7 +265,8 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     let shape = |i: u32| if many(i) { Shape::Placed(placed(i as usize)) } else { Shape::Posed(posed.get(i)) };
     let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };
-    ctx.pairs.par_iter_mut().filter(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|pair| {
+    let rows = ctx.pairs.par_iter_mut().zip(starts_in.par_iter().zip(starts_out.par_iter_mut()));
+    rows.filter(|(p, _)| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|(pair, (&from, ends))| {
         let (ia, ib) = (pair.a, pair.b);
         let (resting, first) = (touching.binary_search(&(ia, ib)).is_ok(), u64::from(ia));
         classify(pair, margin(pair), |[wide, proof]| {
@@ -262,7 +277,9 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
                 }
                 // One GJK bound answers both margins (its first direction is the line of
                 // centres, which `separated` tries).
-                let bound = distance_bound(shape(ia), shape(ib), wide).max(gap);
+                let (bound, first) = distance_bound_from(shape(ia), shape(ib), wide, from);
+                *ends = Some(first);
+                let bound = bound.max(gap);
                 return [bound > wide, bound <= wide && wide > proof && bound > proof];
             }
             let (pa, pb) = (posed.get(ia), posed.get(ib));
@@ -270,6 +287,10 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
             [by_wide, !by_wide && wide > proof && separated(pa, pb, proof)]
         });
     });
+    starts.clear();
+    // A pair GJK skipped this step keeps its old starts.
+    let ends = starts_out.iter().zip(starts_in.iter()).map(|(now, old)| now.or(*old));
+    starts.extend(ctx.pairs.iter().zip(ends).filter_map(|(p, e)| e.map(|e| ((p.a, p.b), e))));
     ctx.pairs.retain(|p| p.state != PairState::Separated);
     touching.clear();
     let touches = |p: &&Pair| p.is_candidate() && (many(p.a) || many(p.b));
@@ -313,10 +334,10 @@ fn skip_recycled(ctx: &mut StepContext) {
     for (pair, &entry) in ctx.pairs.iter_mut().zip(&cached).filter(|(p, e)| **e != u32::MAX && p.is_candidate()) {
         let (kept, r) = (&cache[entry as usize].1, &s.recycling[entry as usize]);
         // A pair no test found last time (held as near) is tested again, to see it touch.
-        if let (Some(feature), Some(m)) = (kept.found, &r.manifold) {
-            if let Some(contact) = recycled_contact(m, &kept.anchors, b, pair.a as usize, feature) {
-                pair.state = PairState::Found(contact);
-            }
+        if let (Some(feature), Some(m)) = (kept.found, &r.manifold)
+            && let Some(contact) = recycled_contact(m, &kept.anchors, b, pair.a as usize, feature)
+        {
+            pair.state = PairState::Found(contact);
         }
     }
     ctx.scratch.get_mut::<PruneScratch>().cached = cached;
@@ -345,6 +366,11 @@ struct PruneScratch {
     /// Each body's extreme vertices along the world axes when last bounded: where the next
     /// step's walks start (a resting body's are where they end).
     hints: Vec<[u32; 6]>,
+    /// Where each pair's GJK first walks ended, in pair order: its next GJK starts there.
+    starts: Vec<((u32, u32), [u32; 2])>,
+    /// Scratch: each pair's entry of `starts`, and where its GJK's first walks end this step.
+    starts_in: Vec<Option<[u32; 2]>>,
+    starts_out: Vec<Option<[u32; 2]>>,
 }
 
 #[cfg(test)]

@@ -86,10 +86,23 @@ pub fn proved_apart(a: &Posed, b: &Posed, margin: Scalar) -> bool {
 /// exceeds `enough` (and 0 when they touch, overlap or come within `enough`).
 #[must_use]
 pub fn distance_bound(a: Shape, b: Shape, enough: Scalar) -> Scalar {
+    distance_bound_from(a, b, enough, None).0
+}
+
+/// `distance_bound` with the first walks (along the line of centres) started at `starts`, A's
+/// and B's vertices, or from the seeds without them; also returns where those walks ended,
+/// for the pair's next step. A walk ends at the same vertex from any start, so the answer is
+/// the same.
+#[must_use]
+pub fn distance_bound_from(a: Shape, b: Shape, enough: Scalar, starts: Option<[u32; 2]>) -> (Scalar, [u32; 2]) {
     // Support of the Minkowski difference A − B along d: A's highest minus B's lowest.
     let (ca, cb) = (a.centre(), b.centre());
     let centre = cb - ca;
-    let (mut sa, mut sb) = (a.lowest_seeded(-centre), b.lowest_seeded(centre));
+    let (mut sa, mut sb) = match starts {
+        Some([i, j]) => (a.lowest(-centre, i).0, b.lowest(centre, j).0),
+        None => (a.lowest_seeded(-centre), b.lowest_seeded(centre)),
+    };
+    let first = [sa, sb];
     let mut support = |d: Vector| {
         let (i, wa) = a.lowest(-d, sa);
         let (j, wb) = b.lowest(d, sb);
@@ -100,7 +113,7 @@ pub fn distance_bound(a: Shape, b: Shape, enough: Scalar) -> Scalar {
     let mut v = ca - cb;
     let mut bound: Scalar = 0.0;
     if v == Vector::ZERO {
-        return bound;
+        return (bound, first);
     }
     for _ in 0..GJK_ITERATIONS {
         let w = support(-v);
@@ -108,18 +121,18 @@ pub fn distance_bound(a: Shape, b: Shape, enough: Scalar) -> Scalar {
         // Every point of A − B lies at least v·w/|v| from the origin along v's direction.
         bound = bound.max(v.dot(w) / length);
         if bound > enough {
-            return bound;
+            return (bound, first);
         }
         if simplex.points().iter().any(|&p| (p - w).length_squared() <= 1e-24 * length * length) {
-            return bound; // no progress: as close as GJK gets (or round-off)
+            return (bound, first); // no progress: as close as GJK gets (or round-off)
         }
         simplex.push(w);
         match closest_to_origin(&mut simplex) {
             Some(closest) if closest.length() > enough => v = closest,
-            _ => return bound, // within `enough` (or overlapping)
+            _ => return (bound, first), // within `enough` (or overlapping)
         }
     }
-    bound
+    (bound, first)
 }
 
 /// The point of the hull of `s` (1 to 4 points) closest to the origin; `s` keeps only the

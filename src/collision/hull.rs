@@ -12,7 +12,7 @@ use crate::collision::posed::{BOUNDS_SLACK, Posed, in_box};
 use crate::math::{Quat, Scalar, Vector};
 use crate::model::mesh::ConvexMesh;
 
-pub use crate::collision::gjk::{Shape, distance_bound, proved_apart};
+pub use crate::collision::gjk::{Shape, distance_bound, distance_bound_from, proved_apart};
 
 /// The slab across the line of centres (see `contact_axis_near`) is widened by this share of
 /// the reach, so features a fast pair may bring into contact this step are among those tried.

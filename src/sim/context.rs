@@ -37,8 +37,9 @@ impl StepStats {
     }
 }
 
-/// World vertices and planes per body, filled once per step and only for bodies that are in
-/// candidate pairs (ARCHITECTURE.md).
+/// World vertices and planes per body, filled once per step and only for the bodies a system
+/// asks for: the tests' candidate pairs, the pairs `solve` finds afresh, and in `prune` the
+/// small meshes (a many-faced body there is walked unposed, `hull::Placed`).
 #[derive(Clone, Debug, Default)]
 pub struct PosedCache {
     entries: Vec<Posed>,
