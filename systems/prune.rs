@@ -268,6 +268,9 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let rows = ctx.pairs.par_iter_mut().zip(starts_in.par_iter().zip(starts_out.par_iter_mut()));
     rows.filter(|(p, _)| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|(pair, (&from, ends))| {
         let (ia, ib) = (pair.a, pair.b);
+        // An actor index may name another mesh after a structural change: such starts go.
+        let size = |i: u32| meshes.get(b.mesh[i as usize]).vertices.len();
+        let from = from.filter(|&[i, j]| (i as usize) < size(ia) && (j as usize) < size(ib));
         let (resting, first) = (touching.binary_search(&(ia, ib)).is_ok(), u64::from(ia));
         classify(pair, margin(pair), |[wide, proof]| {
             if many(ia) || many(ib) {
