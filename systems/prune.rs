@@ -3,15 +3,15 @@
 //! of them can fire on a pair it removes (proof on `separated`).
 
 use crate::collision::contact::{Pair, PairState};
-use crate::collision::hull::{distance_bound, is_many_faced, lowest_vertex_seeded, proved_apart};
+use crate::collision::hull::{Placed, Shape, distance_bound_from, is_many_faced, lowest_vertex_seeded, proved_apart};
 use crate::collision::posed::Posed;
 use crate::math::{Mat3, Scalar, Vector};
 use crate::model::mesh::MeshTable;
 use crate::sim::bodies::Bodies;
 use crate::sim::context::Params;
 use crate::sim::context::StepContext;
-use crate::solver::SolveScratch;
-use crate::systems::solve::recycled_state;
+use crate::solver::{Recycling, SolveScratch, cache_entries};
+use crate::systems::solve::{poses, recycled_contact, recycled_points};
 use hecs::World;
 use rayon::prelude::*;
 
@@ -70,7 +70,12 @@ fn separated_cheaply(a: &Posed, b: &Posed, margin: Scalar) -> bool {
 /// How far apart the bodies' bounding boxes are along the farthest world axis [m] (negative
 /// when they overlap).
 fn bounds_gap(a: &Posed, b: &Posed) -> Scalar {
-    (b.bounds.0 - a.bounds.1).max(a.bounds.0 - b.bounds.1).max_element()
+    gap_between(a.bounds, b.bounds)
+}
+
+/// `bounds_gap` of two (min, max) boxes.
+fn gap_between(a: (Vector, Vector), b: (Vector, Vector)) -> Scalar {
+    (b.0 - a.1).max(a.0 - b.1).max_element()
 }
 
 /// True when the projections of `a` and `b` on `axis` are more than `margin` apart.
@@ -165,7 +170,7 @@ fn pair_margin(
 /// Marks `pair` `Separated` when `apart` proves it apart by the wide margin, else `Near` when
 /// it proves it apart by the proof margin (`pair_margin`). `apart([wide, proof])` says whether
 /// it is proved apart by each (the second only asked for when the first fails).
-fn classify(pair: &mut Pair, (wide, proof): (Scalar, Scalar), apart: impl Fn([Scalar; 2]) -> [bool; 2]) {
+fn classify(pair: &mut Pair, (wide, proof): (Scalar, Scalar), mut apart: impl FnMut([Scalar; 2]) -> [bool; 2]) {
     let [by_wide, by_proof] = apart([wide, proof]);
     if by_wide {
         pair.state = PairState::Separated;
@@ -221,70 +226,123 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
-    ctx.pose_candidates();
-    let (posed, meshes, b, params, dt) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params, ctx.dt);
+    // Small meshes are posed whole; many-faced ones are left unposed (`Placed`): their GJK and
+    // bounds walk the body-frame vertices, and the tests and `solve` pose only the bodies of
+    // the pairs they take (a recycled pair's need none).
+    let (meshes, b) = (&ctx.meshes, &ctx.bodies);
+    let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
+    let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
+    ctx.posed.pose(b, candidates.clone().filter(|&i| !many(i)));
+    let PruneScratch { wanted, bounds, hints, starts, starts_in, starts_out, .. } =
+        ctx.scratch.get_mut::<PruneScratch>();
+    // Each pair's GJK starts from where last step's first walks ended (its entry in `starts`:
+    // both lists in pair order, one merge).
+    starts_in.clear();
+    starts_out.clear();
+    starts_out.resize(ctx.pairs.len(), None);
+    let mut at = 0;
+    for pair in &ctx.pairs {
+        while at < starts.len() && starts[at].0 < (pair.a, pair.b) {
+            at += 1;
+        }
+        starts_in.push(starts.get(at).filter(|s| s.0 == (pair.a, pair.b)).map(|s| s.1));
+    }
+    let placed = |i: usize| Placed { mesh: meshes.get(b.mesh[i]), position: b.position[i], rotation: b.rotation[i] };
+    wanted.clear();
+    wanted.resize(b.len(), false);
+    candidates.filter(|&i| many(i)).for_each(|i| wanted[i as usize] = true);
+    bounds.resize(b.len(), (Vector::ZERO, Vector::ZERO));
+    hints.resize(b.len(), [0; 6]);
+    let rows = bounds.par_iter_mut().zip(hints.par_iter_mut()).zip(wanted.par_iter()).enumerate();
+    rows.filter(|(_, (_, w))| **w).for_each(|(i, ((bounds, hints), _))| {
+        let p = placed(i);
+        hints.iter_mut().filter(|h| **h as usize >= p.mesh.vertices.len()).for_each(|h| *h = 0);
+        *bounds = p.bounds(hints);
+    });
+    let bounds = &*bounds;
+    let (posed, params, dt) = (&ctx.posed, &ctx.params, ctx.dt);
     let margin = |p: &Pair| pair_margin(p, b, meshes, params, (dt, &speculative));
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
-    ctx.pairs.par_iter_mut().filter(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|pair| {
-        let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
-        let (resting, first) = (touching.binary_search(&(pair.a, pair.b)).is_ok(), u64::from(pair.a));
+    let shape = |i: u32| if many(i) { Shape::Placed(placed(i as usize)) } else { Shape::Posed(posed.get(i)) };
+    let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };
+    let rows = ctx.pairs.par_iter_mut().zip(starts_in.par_iter().zip(starts_out.par_iter_mut()));
+    rows.filter(|(p, _)| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|(pair, (&from, ends))| {
+        let (ia, ib) = (pair.a, pair.b);
+        // An actor index may name another mesh after a structural change: such starts go.
+        let size = |i: u32| meshes.get(b.mesh[i as usize]).vertices.len();
+        let from = from.filter(|&[i, j]| (i as usize) < size(ia) && (j as usize) < size(ib));
+        let (resting, first) = (touching.binary_search(&(ia, ib)).is_ok(), u64::from(ia));
         classify(pair, margin(pair), |[wide, proof]| {
-            if is_many_faced(pa) || is_many_faced(pb) {
-                let gap = bounds_gap(pa, pb);
+            if many(ia) || many(ib) {
+                let gap = gap_between(bounds_of(ia), bounds_of(ib));
                 if resting && !(step + first).is_multiple_of(RETEST_EVERY) {
                     return [gap > wide, gap <= wide && wide > proof && gap > proof];
                 }
                 // One GJK bound answers both margins (its first direction is the line of
                 // centres, which `separated` tries).
-                let bound = distance_bound(pa, pb, wide).max(gap);
+                let (bound, first) = distance_bound_from(shape(ia), shape(ib), wide, from);
+                *ends = Some(first);
+                let bound = bound.max(gap);
                 return [bound > wide, bound <= wide && wide > proof && bound > proof];
             }
+            let (pa, pb) = (posed.get(ia), posed.get(ib));
             let by_wide = separated(pa, pb, wide);
             [by_wide, !by_wide && wide > proof && separated(pa, pb, proof)]
         });
     });
+    starts.clear();
+    // A pair GJK skipped this step keeps its old starts.
+    let ends = starts_out.iter().zip(starts_in.iter()).map(|(now, old)| now.or(*old));
+    starts.extend(ctx.pairs.iter().zip(ends).filter_map(|(p, e)| e.map(|e| ((p.a, p.b), e))));
     ctx.pairs.retain(|p| p.state != PairState::Separated);
-    let (posed, pairs) = (&ctx.posed, &ctx.pairs);
     touching.clear();
-    let many = |p: &&Pair| is_many_faced(posed.get(p.a)) || is_many_faced(posed.get(p.b));
-    touching.extend(pairs.iter().filter(|p| p.is_candidate()).filter(many).map(|p| (p.a, p.b)));
+    let touches = |p: &&Pair| p.is_candidate() && (many(p.a) || many(p.b));
+    touching.extend(ctx.pairs.iter().filter(touches).map(|p| (p.a, p.b)));
     let scratch = ctx.scratch.get_mut::<PruneScratch>();
     (scratch.speculative, scratch.touching) = (speculative, touching);
     skip_recycled(ctx);
 }
 
 /// Takes the pairs whose points `solve` will recycle out of the paper's tests: each is given
-/// the verdict the tests gave when they last ran on it (`solve::recycled_state`), which is all
-/// `solve` reads of them there, so its results are the same bits (docs/physics.md §6.3). Only
-/// pairs `solve` holds, and only while its warm-start cache is last step's.
+/// the verdict the tests gave when they last ran on it and the recycled contact
+/// (`solve::recycled_contact`), which is all `solve` reads of them there, so its results are
+/// the same bits (docs/physics.md §6.3). Only pairs `solve` holds, and only while its
+/// warm-start cache is last step's. Whether each resting pair with a cache entry keeps its
+/// points is worked out here once and left for `solve` (`SolveScratch::recycling`).
 fn skip_recycled(ctx: &mut StepContext) {
-    let last_step = |s: &SolveScratch| s.step + 1 == ctx.step && !s.cache.is_empty();
+    let (step, b, meshes, params, dt) = (ctx.step, &ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
+    let last_step = |s: &SolveScratch| s.step + 1 == step && !s.cache.is_empty();
     if !ctx.scratch.get::<SolveScratch>().is_some_and(last_step) {
         return;
     }
     let mut cached = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().cached);
-    let Some(solve) = ctx.scratch.get::<SolveScratch>() else { return };
-    // Each pair's entry in the cache: both lists are in pair order, so one merge.
-    let (cache, mut at) = (&solve.cache, 0);
-    cached.clear();
-    for pair in &ctx.pairs {
-        let key = (pair.a, pair.b);
-        while at < cache.len() && cache[at].0 < key {
-            at += 1;
-        }
-        cached.push(if at < cache.len() && cache[at].0 == key { at as u32 } else { u32::MAX });
-    }
-    let (b, meshes, params, dt) = (&ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
-    let rows = ctx.pairs.par_iter_mut().zip(cached.par_iter());
-    rows.filter(|(p, entry)| **entry != u32::MAX && p.is_candidate()).for_each(|(pair, &entry)| {
+    let s = ctx.scratch.get_mut::<SolveScratch>();
+    cache_entries(&s.cache, &ctx.pairs, &mut cached);
+    s.recycling_step = step;
+    s.recycling.clear();
+    s.recycling.resize(s.cache.len(), Recycling::default());
+    let open = |p: &Pair| p.is_candidate() || p.is_near();
+    for (pair, &entry) in ctx.pairs.iter().zip(&cached).filter(|(p, e)| **e != u32::MAX && open(p)) {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         if params.resting_contacts(dt, b.pair_friction(ia, ib)) {
-            let thin = b.thinner(meshes, ia, ib);
-            if let Some(state) = recycled_state(&cache[entry as usize].1, b, thin, ia, ib) {
-                pair.state = state;
-            }
+            s.recycling[entry as usize].poses = Some(poses(b, ia, ib));
         }
+    }
+    let (cache, recycling) = (&s.cache, &mut s.recycling);
+    let rows = recycling.par_iter_mut().zip(cache.par_iter());
+    rows.filter(|(r, _)| r.poses.is_some()).for_each(|(r, ((a, b_), entry))| {
+        let (ia, ib) = (*a as usize, *b_ as usize);
+        r.manifold = recycled_points(&entry.anchors, b, b.thinner(meshes, ia, ib), ia, ib);
     });
+    for (pair, &entry) in ctx.pairs.iter_mut().zip(&cached).filter(|(p, e)| **e != u32::MAX && p.is_candidate()) {
+        let (kept, r) = (&cache[entry as usize].1, &s.recycling[entry as usize]);
+        // A pair no test found last time (held as near) is tested again, to see it touch.
+        if let (Some(feature), Some(m)) = (kept.found, &r.manifold)
+            && let Some(contact) = recycled_contact(m, &kept.anchors, b, pair.a as usize, feature)
+        {
+            pair.state = PairState::Found(contact);
+        }
+    }
     ctx.scratch.get_mut::<PruneScratch>().cached = cached;
 }
 
@@ -304,6 +362,18 @@ struct PruneScratch {
     touching: Vec<(u32, u32)>,
     /// Scratch of `skip_recycled`: each pair's index in `solve`'s cache (`u32::MAX`: none).
     cached: Vec<u32>,
+    /// Scratch: body i is a many-faced body of a candidate pair.
+    wanted: Vec<bool>,
+    /// Each such body's world bounds this step (`Placed::bounds`).
+    bounds: Vec<(Vector, Vector)>,
+    /// Each body's extreme vertices along the world axes when last bounded: where the next
+    /// step's walks start (a resting body's are where they end).
+    hints: Vec<[u32; 6]>,
+    /// Where each pair's GJK first walks ended, in pair order: its next GJK starts there.
+    starts: Vec<((u32, u32), [u32; 2])>,
+    /// Scratch: each pair's entry of `starts`, and where its GJK's first walks end this step.
+    starts_in: Vec<Option<[u32; 2]>>,
+    starts_out: Vec<Option<[u32; 2]>>,
 }
 
 #[cfg(test)]

@@ -26,7 +26,7 @@ use crate::collision::manifold::{ClipScratch, Manifold, contact_axis, manifold, 
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
-use crate::solver::{CachedManifold, ContactAnchors, SolveScratch};
+use crate::solver::{CachedManifold, ContactAnchors, Recycling, SolveScratch, cache_entries};
 use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prepare_joints};
 use hecs::World;
 use rayon::prelude::*;
@@ -72,7 +72,6 @@ pub fn solve(_world: &mut World, ctx: &mut StepContext) {
             s.jointed.push(i);
         }
     }
-    ctx.pose_pairs(open);
     find_manifolds(ctx);
     build_constraints(ctx);
     let s = ctx.scratch.get_mut::<SolveScratch>();
@@ -92,50 +91,53 @@ fn find_manifolds(ctx: &mut StepContext) {
     let s = ctx.scratch.get_mut::<SolveScratch>();
     ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut s.speculative);
     let speculative = &s.speculative;
-    let (posed, meshes, b, params) = (&ctx.posed, &ctx.meshes, &ctx.bodies, &ctx.params);
+    let (meshes, b, params) = (&ctx.meshes, &ctx.bodies, &ctx.params);
     let margin = params.contact_margin;
+    let reach = |ia: usize, ib: usize, thin: Scalar| margin * thin + speculative[ia] + speculative[ib];
     let n = s.pairs.len();
     s.manifolds.resize(n, Manifold::default());
     s.anchors.resize(n, ContactAnchors::default());
     s.recycled.resize(n, false);
     s.near.clear();
     s.near.extend(s.pairs.iter().map(|p| p.is_candidate() || p.is_near()));
-    // Each pair's entry in last step's cache: both lists are in pair order, so one merge.
-    s.cached.clear();
-    let mut at = 0;
-    for pair in &s.pairs {
-        let key = (pair.a, pair.b);
-        while at < s.cache.len() && s.cache[at].0 < key {
-            at += 1;
-        }
-        s.cached.push(if at < s.cache.len() && s.cache[at].0 == key { at as u32 } else { u32::MAX });
-    }
+    cache_entries(&s.cache, &s.pairs, &mut s.cached);
     let cache = &s.cache;
     let cached = &s.cached;
+    // `prune`'s verdicts, if it worked them out this step (each checked against the poses).
+    let judged: &[Recycling] = if s.recycling_step == ctx.step { &s.recycling } else { &[] };
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
     let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter_mut())).zip(cached.par_iter());
-    rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (anchors, recycled)), &entry)| {
+    rows.for_each(|(((pair, m), (anchors, recycled)), &entry)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
-        let reach = margin * thin + speculative[ia] + speculative[ib];
-        let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
         let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.anchors);
         *recycled = false;
-        if let Some(old) = old.filter(|g| still(g, b, ia, ib, RECYCLE_DISTANCE * thin)) {
-            *recycled = true;
-            *anchors = *old;
-            *m = placed(old, b, ia, ib);
-            let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y])).unwrap_or(0);
-            if m.len == 0 || m.gaps[deepest] > reach {
-                m.len = 0;
-                pair.state = PairState::Candidate; // drawn apart
-            } else {
-                let normal = b.rotation[ia] * old.normal;
-                pair.state =
-                    PairState::Resolved(Contact { point: m.points[deepest], normal, depth: -m.gaps[deepest], feature });
+        let verdict = judged.get(entry as usize).filter(|v| v.poses == Some(poses(b, ia, ib)));
+        let kept = old.and_then(|g| verdict.map_or_else(|| recycled_points(g, b, thin, ia, ib), |v| v.manifold));
+        if let (Some(old), Some(kept)) = (old, kept) {
+            (*recycled, *anchors, *m) = (true, *old, kept);
+            let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
+            match recycled_contact(m, old, b, ia, feature) {
+                Some(c) if -c.depth <= reach(ia, ib, thin) => pair.state = PairState::Resolved(c),
+                _ => {
+                    m.len = 0;
+                    pair.state = PairState::Candidate; // drawn apart
+                }
             }
-            return;
         }
+    });
+    s.recycling.clear();
+    // Only the pairs found afresh need their bodies posed.
+    let fresh = s.pairs.iter().zip(&s.recycled).filter(|(_, r)| !**r).flat_map(|(p, _)| [p.a, p.b]);
+    ctx.posed.pose(b, fresh);
+    let posed = &ctx.posed;
+    let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
+    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter()));
+    rows.filter(|(_, (_, r))| !**r).for_each_init(ClipScratch::default, |scratch, ((pair, m), (anchors, _))| {
+        let (ia, ib) = (pair.a as usize, pair.b as usize);
+        let thin = b.thinner(meshes, ia, ib);
+        let reach = reach(ia, ib, thin);
+        let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
         // Held along the pair's least-overlap axis (see `contact_axis`), touching or a hair
         // apart (speculatively); the tests' own normal and depth decide only that it touches.
@@ -155,28 +157,38 @@ fn find_manifolds(ctx: &mut StepContext) {
     });
 }
 
-/// The state a resting pair takes instead of the detection tests' verdict when `solve` will
-/// recycle its points (`entry`'s anchors are `still`) and a test found it last time, else `None`: `solve` then
-/// reads nothing of the tests' contact but its feature, so `prune` skips the tests and the pair
-/// keeps the feature they gave when they last ran (docs/physics.md §6.3). The contact is the
-/// recycled manifold's deepest point, the one `solve` puts in its place.
-pub(super) fn recycled_state(
-    entry: &CachedManifold,
+/// The points `old` of a pair's cache entry placed at the bodies' current poses when the pair
+/// keeps them (B has moved little relative to A since they were found, `still`), else `None`.
+/// `prune` works this out for the pairs it may take out of the tests (`Recycling`), and
+/// `solve` reads its answer at the same poses.
+pub(super) fn recycled_points(
+    old: &ContactAnchors,
     b: &Bodies,
     thin: Scalar,
     ia: usize,
     ib: usize,
-) -> Option<PairState> {
-    // A pair no test found last time (held as near) is tested again, to see it touch.
-    let feature = entry.found?;
-    let old = &entry.anchors;
-    if old.len == 0 || !still(old, b, ia, ib, RECYCLE_DISTANCE * thin) {
-        return None;
-    }
-    let m = placed(old, b, ia, ib);
-    let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y])).unwrap_or(0);
+) -> Option<Manifold> {
+    still(old, b, ia, ib, RECYCLE_DISTANCE * thin).then(|| placed(old, b, ia, ib))
+}
+
+/// The contact a recycled pair is held at, found by `feature`: the deepest of its kept points
+/// `m`, with the kept normal turned with A; `None` when no point is kept. It is also the
+/// contact `prune` gives a pair it takes out of the tests (docs/physics.md §6.3).
+pub(super) fn recycled_contact(
+    m: &Manifold,
+    old: &ContactAnchors,
+    b: &Bodies,
+    ia: usize,
+    feature: Feature,
+) -> Option<Contact> {
+    let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y]))?;
     let normal = b.rotation[ia] * old.normal;
-    Some(PairState::Found(Contact { point: m.points[deepest], normal, depth: -m.gaps[deepest], feature }))
+    Some(Contact { point: m.points[deepest], normal, depth: -m.gaps[deepest], feature })
+}
+
+/// The poses a recycling verdict holds for: A's and B's centres and orientations.
+pub(super) fn poses(b: &Bodies, ia: usize, ib: usize) -> ([Vector; 2], [Quat; 2]) {
+    ([b.position[ia], b.position[ib]], [b.orientation[ia], b.orientation[ib]])
 }
 
 /// True when B has moved, relative to A, by less than `distance` [m] since `g` was found: the

@@ -101,3 +101,49 @@ fn recycled_pairs_skip_the_tests_without_changing_a_bit() {
         eprintln!("{scene:?}: impulses {:?} / {:?}, found {:?} / {:?}", skipping.1, all.1, skipping.2, all.2);
     }
 }
+
+/// Recycling verdicts `prune` left for `solve` this step (counted by `forget_verdicts`).
+static VERDICTS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// A user system after `prune`: throws away its recycling verdicts, so `solve` works each out
+/// again.
+fn forget_verdicts(_world: &mut hecs::World, ctx: &mut rigid_sandbox::StepContext) {
+    let s = ctx.scratch.get_mut::<rigid_sandbox::solver::SolveScratch>();
+    let kept = s.recycling.iter().filter(|r| r.manifold.is_some()).count();
+    VERDICTS.fetch_add(kept, std::sync::atomic::Ordering::SeqCst);
+    s.recycling.clear();
+}
+
+/// A user system after `prune`: moves every third body by a nanometre, so the poses `prune`
+/// judged recycling at are no longer the bodies' own.
+fn nudge(_world: &mut hecs::World, ctx: &mut rigid_sandbox::StepContext) {
+    for i in (5..ctx.bodies.len()).step_by(3) {
+        ctx.bodies.position[i].x += 1e-9;
+        ctx.mark_moved(i);
+    }
+}
+
+#[test]
+fn solve_takes_the_recycling_verdicts_of_prune_only_at_their_poses() {
+    // docs/physics.md §6.3: `prune` works out once a step whether each resting pair keeps its
+    // points; `solve` reads that answer for the same poses, which must give the bits of working
+    // it out again, and works it out again when a body moved in between.
+    let run = |forget: bool, moved: bool| {
+        let mut sim = scene_sim(BenchScene::HullRain { subdivisions: 2 }, 30, 3);
+        if forget {
+            let system = rigid_sandbox::System { name: "forget_verdicts", run: forget_verdicts };
+            sim.schedule.insert_after("prune", system).expect("prune is there");
+        }
+        if moved {
+            let system = rigid_sandbox::System { name: "nudge", run: nudge };
+            sim.schedule.insert_after("prune", system).expect("prune is there");
+        }
+        sim.run(300).expect("finite");
+        rigid_sandbox::io::output::state_hash(&sim.actors())
+    };
+    let before = VERDICTS.load(std::sync::atomic::Ordering::SeqCst);
+    assert_eq!(run(false, false), run(true, false), "the same bits with the verdicts or without");
+    let kept = VERDICTS.load(std::sync::atomic::Ordering::SeqCst) - before;
+    assert!(kept > 300, "only {kept} verdicts kept the points");
+    assert_eq!(run(false, true), run(true, true), "a moved pair is judged again");
+}

@@ -2,7 +2,7 @@
 //! between two bodies from support points found by walking vertex neighbours, which proves a
 //! pair apart without testing every face against every vertex.
 
-use crate::collision::hull::{lowest_vertex, lowest_vertex_seeded};
+use crate::collision::hull::{Placed, lowest_vertex, lowest_vertex_seeded};
 use crate::collision::posed::Posed;
 use crate::math::{Scalar, Vector};
 
@@ -34,32 +34,86 @@ impl Simplex {
 /// only costs the tests' time).
 const GJK_ITERATIONS: usize = 64;
 
+/// A body GJK takes support points of: posed (its world vertices at hand) or placed (only
+/// its pose, `hull::Placed`, walking its body-frame vertices). Both give the same vertices.
+#[derive(Clone, Copy)]
+pub enum Shape<'a> {
+    /// World vertices at hand.
+    Posed(&'a Posed),
+    /// A many-faced body left unposed.
+    Placed(Placed<'a>),
+}
+
+impl Shape<'_> {
+    fn centre(&self) -> Vector {
+        match self {
+            Self::Posed(p) => p.position,
+            Self::Placed(p) => p.position,
+        }
+    }
+
+    /// The vertex lowest along `dir` walking from `start`, and its world point.
+    fn lowest(&self, dir: Vector, start: u32) -> (u32, Vector) {
+        match self {
+            Self::Posed(p) => {
+                let i = lowest_vertex(p, dir, start).0;
+                (i, p.vertices[i as usize])
+            }
+            Self::Placed(p) => {
+                let i = p.lowest(dir, start);
+                (i, p.vertex(i))
+            }
+        }
+    }
+
+    fn lowest_seeded(&self, dir: Vector) -> u32 {
+        match self {
+            Self::Posed(p) => lowest_vertex_seeded(p, dir).0,
+            Self::Placed(p) => p.lowest_seeded(dir),
+        }
+    }
+}
+
 /// True when GJK proves `a` and `b` more than `margin` apart: a direction `v` whose support
 /// points bound their distance from below by more than `margin`. `false` when they are within
 /// `margin`, overlap, or no proof came within `GJK_ITERATIONS`.
 #[must_use]
 pub fn proved_apart(a: &Posed, b: &Posed, margin: Scalar) -> bool {
-    distance_bound(a, b, margin) > margin
+    distance_bound(Shape::Posed(a), Shape::Posed(b), margin) > margin
 }
 
 /// A lower bound on the distance between `a` and `b` [m] found by GJK, stopping as soon as it
 /// exceeds `enough` (and 0 when they touch, overlap or come within `enough`).
 #[must_use]
-pub fn distance_bound(a: &Posed, b: &Posed, enough: Scalar) -> Scalar {
+pub fn distance_bound(a: Shape, b: Shape, enough: Scalar) -> Scalar {
+    distance_bound_from(a, b, enough, None).0
+}
+
+/// `distance_bound` with the first walks (along the line of centres) started at `starts`, A's
+/// and B's vertices, or from the seeds without them; also returns where those walks ended,
+/// for the pair's next step. A walk ends at the same vertex from any start, so the answer is
+/// the same.
+#[must_use]
+pub fn distance_bound_from(a: Shape, b: Shape, enough: Scalar, starts: Option<[u32; 2]>) -> (Scalar, [u32; 2]) {
     // Support of the Minkowski difference A − B along d: A's highest minus B's lowest.
-    let centre = b.position - a.position;
-    let (mut sa, mut sb) = (lowest_vertex_seeded(a, -centre).0, lowest_vertex_seeded(b, centre).0);
+    let (ca, cb) = (a.centre(), b.centre());
+    let centre = cb - ca;
+    let (mut sa, mut sb) = match starts {
+        Some([i, j]) => (a.lowest(-centre, i).0, b.lowest(centre, j).0),
+        None => (a.lowest_seeded(-centre), b.lowest_seeded(centre)),
+    };
+    let first = [sa, sb];
     let mut support = |d: Vector| {
-        let (i, _) = lowest_vertex(a, -d, sa);
-        let (j, _) = lowest_vertex(b, d, sb);
+        let (i, wa) = a.lowest(-d, sa);
+        let (j, wb) = b.lowest(d, sb);
         (sa, sb) = (i, j);
-        a.vertices[i as usize] - b.vertices[j as usize]
+        wa - wb
     };
     let mut simplex = Simplex::default();
-    let mut v = a.position - b.position;
+    let mut v = ca - cb;
     let mut bound: Scalar = 0.0;
     if v == Vector::ZERO {
-        return bound;
+        return (bound, first);
     }
     for _ in 0..GJK_ITERATIONS {
         let w = support(-v);
@@ -67,18 +121,18 @@ pub fn distance_bound(a: &Posed, b: &Posed, enough: Scalar) -> Scalar {
         // Every point of A − B lies at least v·w/|v| from the origin along v's direction.
         bound = bound.max(v.dot(w) / length);
         if bound > enough {
-            return bound;
+            return (bound, first);
         }
         if simplex.points().iter().any(|&p| (p - w).length_squared() <= 1e-24 * length * length) {
-            return bound; // no progress: as close as GJK gets (or round-off)
+            return (bound, first); // no progress: as close as GJK gets (or round-off)
         }
         simplex.push(w);
         match closest_to_origin(&mut simplex) {
             Some(closest) if closest.length() > enough => v = closest,
-            _ => return bound, // within `enough` (or overlapping)
+            _ => return (bound, first), // within `enough` (or overlapping)
         }
     }
-    bound
+    (bound, first)
 }
 
 /// The point of the hull of `s` (1 to 4 points) closest to the origin; `s` keeps only the

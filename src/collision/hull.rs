@@ -10,8 +10,9 @@
 use crate::collision::manifold::{Axis, PREFER, Reference};
 use crate::collision::posed::{BOUNDS_SLACK, Posed, in_box};
 use crate::math::{Quat, Scalar, Vector};
+use crate::model::mesh::ConvexMesh;
 
-pub use crate::collision::gjk::{distance_bound, proved_apart};
+pub use crate::collision::gjk::{Shape, distance_bound, distance_bound_from, proved_apart};
 
 /// The slab across the line of centres (see `contact_axis_near`) is widened by this share of
 /// the reach, so features a fast pair may bring into contact this step are among those tried.
@@ -28,12 +29,17 @@ pub fn is_many_faced(p: &Posed) -> bool {
 /// minimum but the global one, so the walk ends there.
 #[must_use]
 pub fn lowest_vertex(p: &Posed, dir: Vector, start: u32) -> (u32, Scalar) {
-    let m = &p.mesh;
-    let (mut at, mut value) = (start, p.vertices[start as usize].dot(dir));
+    walk_down(&p.mesh, &p.vertices, dir, start)
+}
+
+/// The walk of `lowest_vertex` over `vertices`, the mesh's own (body frame) or posed ones.
+#[inline]
+fn walk_down(m: &ConvexMesh, vertices: &[Vector], dir: Vector, start: u32) -> (u32, Scalar) {
+    let (mut at, mut value) = (start, vertices[start as usize].dot(dir));
     loop {
         let mut next = at;
         for &j in &m.neighbours[m.neighbour_start[at as usize] as usize..m.neighbour_start[at as usize + 1] as usize] {
-            let v = p.vertices[j as usize].dot(dir);
+            let v = vertices[j as usize].dot(dir);
             if v < value {
                 (next, value) = (j, v);
             }
@@ -42,6 +48,59 @@ pub fn lowest_vertex(p: &Posed, dir: Vector, start: u32) -> (u32, Scalar) {
             return (at, value);
         }
         at = next;
+    }
+}
+
+/// A many-faced mesh at a pose without its world vertices: `prune`'s GJK and bounds walk the
+/// mesh's body-frame vertices along the direction turned into the body frame, and turn only
+/// the vertex a walk ends at, as posing would (`Posed::update`, the same arithmetic). A walk
+/// ends at the lowest vertex in either frame; the two frames' round-off could part only
+/// vertices tied to within it, which a turned body does not have.
+#[derive(Clone, Copy)]
+pub struct Placed<'a> {
+    /// The body-frame mesh.
+    pub mesh: &'a ConvexMesh,
+    /// World centre of mass [m].
+    pub position: Vector,
+    /// Body → world rotation.
+    pub rotation: crate::math::Mat3,
+}
+
+impl Placed<'_> {
+    /// World point of vertex `i`, to the bit the posed one.
+    #[must_use]
+    pub fn vertex(&self, i: u32) -> Vector {
+        self.position + self.rotation * self.mesh.vertices[i as usize]
+    }
+
+    /// The vertex lowest along world `dir`, walking from `start`.
+    #[must_use]
+    pub fn lowest(&self, dir: Vector, start: u32) -> u32 {
+        walk_down(self.mesh, &self.mesh.vertices, self.rotation.transpose() * dir, start).0
+    }
+
+    /// `lowest` from the seed of the cube direction nearest `−dir` (`lowest_vertex_seeded`).
+    #[must_use]
+    pub fn lowest_seeded(&self, dir: Vector) -> u32 {
+        let d = self.rotation.transpose() * dir;
+        let seed = self.mesh.seeds.get(crate::model::mesh::seed_index(-d)).copied().unwrap_or(0);
+        walk_down(self.mesh, &self.mesh.vertices, d, seed).0
+    }
+
+    /// The world bounds of the vertices, (min, max) [m], as posing finds them: each the extreme
+    /// vertex along a world axis, found by a walk from `hints` (its six vertices, updated).
+    #[must_use]
+    pub fn bounds(&self, hints: &mut [u32; 6]) -> (Vector, Vector) {
+        let rows = self.rotation.transpose();
+        let (mut lo, mut hi) = (Vector::ZERO, Vector::ZERO);
+        for k in 0..3 {
+            let d = rows.col(k);
+            hints[2 * k] = walk_down(self.mesh, &self.mesh.vertices, d, hints[2 * k]).0;
+            hints[2 * k + 1] = walk_down(self.mesh, &self.mesh.vertices, -d, hints[2 * k + 1]).0;
+            lo[k] = self.vertex(hints[2 * k])[k];
+            hi[k] = self.vertex(hints[2 * k + 1])[k];
+        }
+        (lo, hi)
     }
 }
 

@@ -37,8 +37,9 @@ impl StepStats {
     }
 }
 
-/// World vertices and planes per body, filled once per step and only for bodies that are in
-/// candidate pairs (ARCHITECTURE.md).
+/// World vertices and planes per body, filled once per step and only for the bodies a system
+/// asks for: the tests' candidate pairs, the pairs `solve` finds afresh, and in `prune` the
+/// small meshes (a many-faced body there is walked unposed, `hull::Placed`).
 #[derive(Clone, Debug, Default)]
 pub struct PosedCache {
     entries: Vec<Posed>,
@@ -224,15 +225,21 @@ impl StepContext {
     /// Poses every body of the pairs `want` picks that was not posed since it last moved (for
     /// systems after the detectors, e.g. pairs with a contact).
     pub fn pose_pairs(&mut self, want: impl Fn(&Pair) -> bool) {
-        let cache = &mut self.posed;
-        cache.wanted.iter_mut().for_each(|w| *w = false);
-        for p in self.pairs.iter().filter(|p| want(p)) {
-            cache.wanted[p.a as usize] = true;
-            cache.wanted[p.b as usize] = true;
+        let bodies = self.pairs.iter().filter(|p| want(p)).flat_map(|p| [p.a, p.b]);
+        self.posed.pose(&self.bodies, bodies);
+    }
+}
+
+impl PosedCache {
+    /// Poses each of `which` (body indices, repeats allowed) that was not posed since it last
+    /// moved.
+    pub fn pose(&mut self, bodies: &Bodies, which: impl Iterator<Item = u32>) {
+        self.wanted.iter_mut().for_each(|w| *w = false);
+        for i in which {
+            self.wanted[i as usize] = true;
         }
-        let bodies = &self.bodies;
-        let rows = cache.entries.par_iter_mut().zip(cache.fresh.par_iter_mut());
-        rows.zip(cache.wanted.par_iter()).enumerate().for_each(|(i, ((posed, fresh), &wanted))| {
+        let rows = self.entries.par_iter_mut().zip(self.fresh.par_iter_mut());
+        rows.zip(self.wanted.par_iter()).enumerate().for_each(|(i, ((posed, fresh), &wanted))| {
             if wanted && !*fresh {
                 posed.update(&Pose { position: bodies.position[i], orientation: bodies.orientation[i] });
                 *fresh = true;

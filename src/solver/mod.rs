@@ -45,7 +45,7 @@ pub(crate) use joint_pass::prepare as prepare_joints;
 pub use joints::{Frame, Joint, JointImpulses, JointKind, Joints, Motor, Spring};
 pub use kernel::{restitution, sweep, warm_start};
 pub use lanes::{Batch, FrictionRows, LaneVectors, Lanes, PointRows};
-pub use scratch::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, SolveScratch};
+pub use scratch::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, Recycling, SolveScratch, cache_entries};
 
 /// A body as the substeps see it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

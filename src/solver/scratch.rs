@@ -83,6 +83,31 @@ pub struct CachedManifold {
     pub found: Option<Feature>,
 }
 
+/// Whether a pair with an entry in the warm-start cache keeps its points this step, worked out
+/// once: by `prune`, which takes such pairs out of the detection tests, and read by `solve`
+/// at the same poses instead of being worked out again.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Recycling {
+    /// A's and B's centres and orientations it holds for; `None`: not worked out.
+    pub poses: Option<([Vector; 2], [Quat; 2])>,
+    /// The kept points placed at those poses; `None` when the bodies moved too much.
+    pub manifold: Option<Manifold>,
+}
+
+/// Each pair's index in `cache` (`u32::MAX` for none), into `out`: both lists are in pair
+/// order, so one merge.
+pub fn cache_entries(cache: &[((u32, u32), CachedManifold)], pairs: &[Pair], out: &mut Vec<u32>) {
+    out.clear();
+    let mut at = 0;
+    for pair in pairs {
+        let key = (pair.a, pair.b);
+        while at < cache.len() && cache[at].0 < key {
+            at += 1;
+        }
+        out.push(if at < cache.len() && cache[at].0 == key { at as u32 } else { u32::MAX });
+    }
+}
+
 /// Reused buffers of the contact solver (`solve`), and its warm-start cache, the one piece of
 /// its state that lives from one step to the next (recycled points and impulses; snapshots
 /// carry it, `snapshot::ContactSnapshot`).
@@ -113,6 +138,11 @@ pub struct SolveScratch {
     pub by_pair: Vec<u32>,
     /// Last step's anchors and impulses by pair, in pair order (found through `cached`).
     pub cache: Vec<((u32, u32), CachedManifold)>,
+    /// `prune`'s recycling verdicts by entry of `cache` (`Recycling`), for `solve` in the
+    /// same step, which empties it.
+    pub recycling: Vec<Recycling>,
+    /// The step `recycling` was worked out in.
+    pub recycling_step: u64,
     /// The step these constraints belong to (`correct` uses them only if `solve` ran this step).
     pub step: u64,
     /// The free bodies of the constraints, each once, in solver-body order (the static slots
