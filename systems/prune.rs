@@ -233,20 +233,15 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
     let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
     ctx.posed.pose(b, candidates.clone().filter(|&i| !many(i)));
-    let PruneScratch { wanted, bounds, hints, starts, starts_in, starts_out, .. } =
+    let PruneScratch { wanted, bounds, hints, starts, starts_in, starts_out, cached, .. } =
         ctx.scratch.get_mut::<PruneScratch>();
-    // Each pair's GJK starts from where last step's first walks ended (its entry in `starts`:
-    // both lists in pair order, one merge).
+    // Each pair's GJK starts from where last step's first walks ended (its entry in `starts`;
+    // `cached` is scratch here, `skip_recycled` fills it afresh).
+    cache_entries(starts, &ctx.pairs, cached);
     starts_in.clear();
+    starts_in.extend(cached.iter().map(|&e| starts.get(e as usize).map(|s| s.1)));
     starts_out.clear();
     starts_out.resize(ctx.pairs.len(), None);
-    let mut at = 0;
-    for pair in &ctx.pairs {
-        while at < starts.len() && starts[at].0 < (pair.a, pair.b) {
-            at += 1;
-        }
-        starts_in.push(starts.get(at).filter(|s| s.0 == (pair.a, pair.b)).map(|s| s.1));
-    }
     let placed = |i: usize| Placed { mesh: meshes.get(b.mesh[i]), position: b.position[i], rotation: b.rotation[i] };
     wanted.clear();
     wanted.resize(b.len(), false);

@@ -95,8 +95,9 @@ pub struct Recycling {
 }
 
 /// Each pair's index in `cache` (`u32::MAX` for none), into `out`: both lists are in pair
-/// order, so one merge.
-pub fn cache_entries(cache: &[((u32, u32), CachedManifold)], pairs: &[Pair], out: &mut Vec<u32>) {
+/// order, so one merge. Any per-pair list kept so serves (the warm-start cache, `prune`'s GJK
+/// starts).
+pub fn cache_entries<T>(cache: &[((u32, u32), T)], pairs: &[Pair], out: &mut Vec<u32>) {
     out.clear();
     let mut at = 0;
     for pair in pairs {
