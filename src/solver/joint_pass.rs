@@ -508,12 +508,18 @@ pub(super) fn arrange(joints: &mut Joints, write_out: bool) {
     let (mut lone, mut rows) = (Vec::new(), Vec::with_capacity(n));
     for (k, joint) in list.iter().enumerate() {
         let alone = write_out && ends[k].iter().filter_map(free).all(|s| held[s] == 1);
-        match AnchoredJoint::of(k, joint, ends[k], &impulses[k]).filter(|_| alone) {
-            Some(a) => lone.push(a),
-            None => general.push(k as u32),
-        }
         // An anchored joint's rows are not the system's.
-        rows.push(if lone.last().is_some_and(|a| a.joint == k as u32) { 0 } else { equality_count(&joint.kind) });
+        let system_rows = match AnchoredJoint::of(k, joint, ends[k], &impulses[k]).filter(|_| alone) {
+            Some(a) => {
+                lone.push(a);
+                0
+            }
+            None => {
+                general.push(k as u32);
+                equality_count(&joint.kind)
+            }
+        };
+        rows.push(system_rows);
     }
     anchored.extend(lone.chunks(super::LANES).map(Anchored::new));
     limited.clear();
