@@ -11,7 +11,7 @@ use crate::sim::bodies::Bodies;
 use crate::sim::context::Params;
 use crate::sim::context::StepContext;
 use crate::solver::{Recycling, SolveScratch, cache_entries};
-use crate::systems::solve::{poses, recycled_contact, recycled_points};
+use crate::systems::solve::{recycled_contact, recycled_points};
 use hecs::World;
 use rayon::prelude::*;
 
@@ -313,19 +313,21 @@ fn skip_recycled(ctx: &mut StepContext) {
     let mut cached = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().cached);
     let s = ctx.scratch.get_mut::<SolveScratch>();
     cache_entries(&s.cache, &ctx.pairs, &mut cached);
-    s.recycling_step = step;
-    s.recycling.clear();
-    s.recycling.resize(s.cache.len(), Recycling::default());
+    s.recycling_moves = ctx.posed.moves();
+    // Entries of earlier steps are left as they are (stale by their step), not rewritten.
+    if s.recycling.len() < s.cache.len() {
+        s.recycling.resize(s.cache.len(), Recycling::default());
+    }
     let open = |p: &Pair| p.is_candidate() || p.is_near();
     for (pair, &entry) in ctx.pairs.iter().zip(&cached).filter(|(p, e)| **e != u32::MAX && open(p)) {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         if params.resting_contacts(dt, b.pair_friction(ia, ib)) {
-            s.recycling[entry as usize].poses = Some(poses(b, ia, ib));
+            s.recycling[entry as usize].step = Some(step);
         }
     }
     let (cache, recycling) = (&s.cache, &mut s.recycling);
     let rows = recycling.par_iter_mut().zip(cache.par_iter());
-    rows.filter(|(r, _)| r.poses.is_some()).for_each(|(r, ((a, b_), entry))| {
+    rows.filter(|(r, _)| r.step == Some(step)).for_each(|(r, ((a, b_), entry))| {
         let (ia, ib) = (*a as usize, *b_ as usize);
         r.manifold = recycled_points(&entry.anchors, b, b.thinner(meshes, ia, ib), ia, ib);
     });

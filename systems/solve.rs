@@ -91,7 +91,7 @@ fn find_manifolds(ctx: &mut StepContext) {
     let s = ctx.scratch.get_mut::<SolveScratch>();
     ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut s.speculative);
     let speculative = &s.speculative;
-    let (meshes, b, params) = (&ctx.meshes, &ctx.bodies, &ctx.params);
+    let (meshes, b, params, step) = (&ctx.meshes, &ctx.bodies, &ctx.params, ctx.step);
     let margin = params.contact_margin;
     let reach = |ia: usize, ib: usize, thin: Scalar| margin * thin + speculative[ia] + speculative[ib];
     let n = s.pairs.len();
@@ -103,8 +103,8 @@ fn find_manifolds(ctx: &mut StepContext) {
     cache_entries(&s.cache, &s.pairs, &mut s.cached);
     let cache = &s.cache;
     let cached = &s.cached;
-    // `prune`'s verdicts, if it worked them out this step (each checked against the poses).
-    let judged: &[Recycling] = if s.recycling_step == ctx.step { &s.recycling } else { &[] };
+    // `prune`'s verdicts, if no body moved since it worked them out (each of this step).
+    let judged: &[Recycling] = if s.recycling_moves == ctx.posed.moves() { &s.recycling } else { &[] };
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
     let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter_mut())).zip(cached.par_iter());
     rows.for_each(|(((pair, m), (anchors, recycled)), &entry)| {
@@ -112,7 +112,7 @@ fn find_manifolds(ctx: &mut StepContext) {
         let thin = b.thinner(meshes, ia, ib);
         let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.anchors);
         *recycled = false;
-        let verdict = judged.get(entry as usize).filter(|v| v.poses == Some(poses(b, ia, ib)));
+        let verdict = judged.get(entry as usize).filter(|v| v.step == Some(step));
         let kept = old.and_then(|g| verdict.map_or_else(|| recycled_points(g, b, thin, ia, ib), |v| v.manifold));
         if let (Some(old), Some(kept)) = (old, kept) {
             (*recycled, *anchors, *m) = (true, *old, kept);
@@ -126,7 +126,6 @@ fn find_manifolds(ctx: &mut StepContext) {
             }
         }
     });
-    s.recycling.clear();
     // Only the pairs found afresh need their bodies posed.
     let fresh = s.pairs.iter().zip(&s.recycled).filter(|(_, r)| !**r).flat_map(|(p, _)| [p.a, p.b]);
     ctx.posed.pose(b, fresh);
@@ -160,7 +159,7 @@ fn find_manifolds(ctx: &mut StepContext) {
 /// The points `old` of a pair's cache entry placed at the bodies' current poses when the pair
 /// keeps them (B has moved little relative to A since they were found, `still`), else `None`.
 /// `prune` works this out for the pairs it may take out of the tests (`Recycling`), and
-/// `solve` reads its answer at the same poses.
+/// `solve` reads its answer if no body moved since.
 pub(super) fn recycled_points(
     old: &ContactAnchors,
     b: &Bodies,
@@ -184,11 +183,6 @@ pub(super) fn recycled_contact(
     let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y]))?;
     let normal = b.rotation[ia] * old.normal;
     Some(Contact { point: m.points[deepest], normal, depth: -m.gaps[deepest], feature })
-}
-
-/// The poses a recycling verdict holds for: A's and B's centres and orientations.
-pub(super) fn poses(b: &Bodies, ia: usize, ib: usize) -> ([Vector; 2], [Quat; 2]) {
-    ([b.position[ia], b.position[ib]], [b.orientation[ia], b.orientation[ib]])
 }
 
 /// True when B has moved, relative to A, by less than `distance` [m] since `g` was found: the

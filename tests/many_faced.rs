@@ -114,8 +114,9 @@ fn forget_verdicts(_world: &mut hecs::World, ctx: &mut rigid_sandbox::StepContex
     s.recycling.clear();
 }
 
-/// A user system after `prune`: moves every third body by a nanometre, so the poses `prune`
-/// judged recycling at are no longer the bodies' own.
+/// A user system after `prune`: moves every third body by a nanometre (and marks it moved, as
+/// a system that moves a body must), so the poses `prune` judged recycling at are no longer
+/// the bodies' own.
 fn nudge(_world: &mut hecs::World, ctx: &mut rigid_sandbox::StepContext) {
     for i in (5..ctx.bodies.len()).step_by(3) {
         ctx.bodies.position[i].x += 1e-9;
@@ -124,10 +125,10 @@ fn nudge(_world: &mut hecs::World, ctx: &mut rigid_sandbox::StepContext) {
 }
 
 #[test]
-fn solve_takes_the_recycling_verdicts_of_prune_only_at_their_poses() {
+fn solve_takes_the_recycling_verdicts_of_prune_only_while_no_body_moved() {
     // docs/physics.md §6.3: `prune` works out once a step whether each resting pair keeps its
-    // points; `solve` reads that answer for the same poses, which must give the bits of working
-    // it out again, and works it out again when a body moved in between.
+    // points; `solve` reads that answer if no body moved since, which must give the bits of
+    // working it out again, and works it out again when a body moved in between.
     let run = |forget: bool, moved: bool| {
         let mut sim = scene_sim(BenchScene::HullRain { subdivisions: 2 }, 30, 3);
         if forget {

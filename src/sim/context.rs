@@ -47,6 +47,9 @@ pub struct PosedCache {
     fresh: Vec<bool>,
     /// Scratch: body i is in a candidate pair.
     wanted: Vec<bool>,
+    /// Counts the moves marked (`mark_moved`) and the reloads: a system that kept something
+    /// worked out from the poses may read it again only while this is unchanged.
+    moves: u64,
 }
 
 impl PosedCache {
@@ -60,6 +63,13 @@ impl PosedCache {
     /// Marks body `i` as moved, so it is posed again when next wanted.
     pub fn mark_moved(&mut self, i: usize) {
         self.fresh[i] = false;
+        self.moves += 1;
+    }
+
+    /// How many moves and reloads there have been (`moves`).
+    #[must_use]
+    pub fn moves(&self) -> u64 {
+        self.moves
     }
 
     fn reset(&mut self, meshes: &MeshTable, bodies: &Bodies) {
@@ -206,6 +216,7 @@ impl StepContext {
         // A body posed last step at the very pose it has now (a fixed one, or one at rest to
         // the bit) keeps its posed mesh: posing is a function of the pose alone.
         let (posed, bodies) = (&mut self.posed, &self.bodies);
+        posed.moves += 1;
         for (i, (entry, fresh)) in posed.entries.iter().zip(posed.fresh.iter_mut()).enumerate() {
             *fresh = *fresh && entry.position == bodies.position[i] && entry.orientation == bodies.orientation[i];
         }

@@ -85,12 +85,12 @@ pub struct CachedManifold {
 
 /// Whether a pair with an entry in the warm-start cache keeps its points this step, worked out
 /// once: by `prune`, which takes such pairs out of the detection tests, and read by `solve`
-/// at the same poses instead of being worked out again.
+/// instead of being worked out again, if no body moved in between.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Recycling {
-    /// A's and B's centres and orientations it holds for; `None`: not worked out.
-    pub poses: Option<([Vector; 2], [Quat; 2])>,
-    /// The kept points placed at those poses; `None` when the bodies moved too much.
+    /// The step it was worked out in (`None`, or an earlier step: not worked out).
+    pub step: Option<u64>,
+    /// The kept points placed at the bodies' poses then; `None` when the bodies moved too much.
     pub manifold: Option<Manifold>,
 }
 
@@ -140,10 +140,11 @@ pub struct SolveScratch {
     /// Last step's anchors and impulses by pair, in pair order (found through `cached`).
     pub cache: Vec<((u32, u32), CachedManifold)>,
     /// `prune`'s recycling verdicts by entry of `cache` (`Recycling`), for `solve` in the
-    /// same step, which empties it.
+    /// same step; entries of earlier steps are stale, not cleared.
     pub recycling: Vec<Recycling>,
-    /// The step `recycling` was worked out in.
-    pub recycling_step: u64,
+    /// `PosedCache::moves` when `prune` worked the verdicts out: `solve` takes them only if no
+    /// body moved since.
+    pub recycling_moves: u64,
     /// The step these constraints belong to (`correct` uses them only if `solve` ran this step).
     pub step: u64,
     /// The free bodies of the constraints, each once, in solver-body order (the static slots
