@@ -233,13 +233,11 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
     let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
     ctx.posed.pose(b, candidates.clone().filter(|&i| !many(i)));
-    let PruneScratch { wanted, bounds, hints, starts, starts_in, starts_out, cached, .. } =
+    let PruneScratch { wanted, bounds, hints, starts, next, starts_out, cached, .. } =
         ctx.scratch.get_mut::<PruneScratch>();
     // Each pair's GJK starts from where last step's first walks ended (its entry in `starts`;
     // `cached` is scratch here, `skip_recycled` fills it afresh).
     cache_entries(starts, &ctx.pairs, cached);
-    starts_in.clear();
-    starts_in.extend(cached.iter().map(|&e| starts.get(e as usize).map(|s| s.1)));
     starts_out.clear();
     starts_out.resize(ctx.pairs.len(), None);
     let placed = |i: usize| Placed { mesh: meshes.get(b.mesh[i]), position: b.position[i], rotation: b.rotation[i] };
@@ -260,8 +258,10 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     let shape = |i: u32| if many(i) { Shape::Placed(placed(i as usize)) } else { Shape::Posed(posed.get(i)) };
     let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };
-    let rows = ctx.pairs.par_iter_mut().zip(starts_in.par_iter().zip(starts_out.par_iter_mut()));
-    rows.filter(|(p, _)| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|(pair, (&kept, out))| {
+    let old = |e: u32| starts.get(e as usize).map(|s| &s.1);
+    let rows = ctx.pairs.par_iter_mut().zip(cached.par_iter().zip(starts_out.par_iter_mut()));
+    rows.filter(|(p, _)| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|(pair, (&entry, out))| {
+        let kept = old(entry);
         let (ia, ib) = (pair.a, pair.b);
         // An actor index may name another mesh after a structural change: such starts go.
         let size = |i: u32| meshes.get(b.mesh[i as usize]).vertices.len();
@@ -292,10 +292,11 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
             [by_wide, !by_wide && wide > proof && separated(pa, pb, proof)]
         });
     });
-    starts.clear();
     // A pair GJK skipped this step keeps its old record.
-    let ends = starts_out.iter().zip(starts_in.iter()).map(|(now, old)| now.or(*old));
-    starts.extend(ctx.pairs.iter().zip(ends).filter_map(|(p, e)| e.map(|e| ((p.a, p.b), e))));
+    next.clear();
+    let kept = starts_out.iter().zip(cached.iter()).map(|(now, &e)| now.as_ref().or_else(|| old(e)));
+    next.extend(ctx.pairs.iter().zip(kept).filter_map(|(p, k)| k.map(|k| ((p.a, p.b), *k))));
+    std::mem::swap(starts, next);
     ctx.pairs.retain(|p| p.state != PairState::Separated);
     touching.clear();
     let touches = |p: &&Pair| p.is_candidate() && (many(p.a) || many(p.b));
@@ -373,9 +374,9 @@ struct PruneScratch {
     hints: Vec<[u32; 6]>,
     /// Each pair's last GJK (`Kept`), in pair order.
     starts: Vec<((u32, u32), Kept)>,
-    /// Scratch: each pair's entry of `starts`, and its GJK's this step.
-    starts_in: Vec<Option<Kept>>,
+    /// Scratch: each pair's GJK this step, and the next `starts`.
     starts_out: Vec<Option<Kept>>,
+    next: Vec<((u32, u32), Kept)>,
 }
 
 /// What `prune` keeps of a pair's last GJK: where its first walks ended (the next GJK starts
