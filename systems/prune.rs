@@ -500,7 +500,11 @@ mod tests {
             if bound <= 0.0 {
                 continue;
             }
-            let then = Apart { bound, poses: ([a.position, b.position], [a.orientation, b.orientation]), meshes: [MeshId(0); 2] };
+            let then = Apart {
+                bound,
+                poses: ([a.position, b.position], [a.orientation, b.orientation]),
+                meshes: [MeshId(0); 2],
+            };
             let (a, b) = (at(xa + dxa, ra + dra), at(xb + dxb, rb + drb));
             let now = then.bound_at(([a.position, b.position], [a.orientation, b.orientation]), [mesh.radius; 2]);
             // The claim holds: GJK proves them apart by just under it (the true distance is more).
