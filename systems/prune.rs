@@ -5,8 +5,8 @@
 use crate::collision::contact::{Pair, PairState};
 use crate::collision::hull::{Placed, Shape, distance_bound_from, is_many_faced, lowest_vertex_seeded, proved_apart};
 use crate::collision::posed::Posed;
-use crate::math::{Mat3, Scalar, Vector};
-use crate::model::mesh::MeshTable;
+use crate::math::{Mat3, Quat, Scalar, Vector};
+use crate::model::mesh::{MeshId, MeshTable};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::Params;
 use crate::sim::context::StepContext;
@@ -233,13 +233,11 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
     let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
     ctx.posed.pose(b, candidates.clone().filter(|&i| !many(i)));
-    let PruneScratch { wanted, bounds, hints, starts, starts_in, starts_out, cached, .. } =
+    let PruneScratch { wanted, bounds, hints, starts, next, starts_out, cached, .. } =
         ctx.scratch.get_mut::<PruneScratch>();
     // Each pair's GJK starts from where last step's first walks ended (its entry in `starts`;
     // `cached` is scratch here, `skip_recycled` fills it afresh).
     cache_entries(starts, &ctx.pairs, cached);
-    starts_in.clear();
-    starts_in.extend(cached.iter().map(|&e| starts.get(e as usize).map(|s| s.1)));
     starts_out.clear();
     starts_out.resize(ctx.pairs.len(), None);
     let placed = |i: usize| Placed { mesh: meshes.get(b.mesh[i]), position: b.position[i], rotation: b.rotation[i] };
@@ -260,12 +258,15 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     let shape = |i: u32| if many(i) { Shape::Placed(placed(i as usize)) } else { Shape::Posed(posed.get(i)) };
     let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };
-    let rows = ctx.pairs.par_iter_mut().zip(starts_in.par_iter().zip(starts_out.par_iter_mut()));
-    rows.filter(|(p, _)| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|(pair, (&from, ends))| {
+    let old = |e: u32| starts.get(e as usize).map(|s| &s.1);
+    let rows = ctx.pairs.par_iter_mut().zip(cached.par_iter().zip(starts_out.par_iter_mut()));
+    rows.filter(|(p, _)| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|(pair, (&entry, out))| {
+        let kept = old(entry);
         let (ia, ib) = (pair.a, pair.b);
         // An actor index may name another mesh after a structural change: such starts go.
         let size = |i: u32| meshes.get(b.mesh[i as usize]).vertices.len();
-        let from = from.filter(|&[i, j]| (i as usize) < size(ia) && (j as usize) < size(ib));
+        let from = kept.map(|k| k.ends).filter(|&[i, j]| (i as usize) < size(ia) && (j as usize) < size(ib));
+        let apart = kept.and_then(|k| k.apart);
         let (resting, first) = (touching.binary_search(&(ia, ib)).is_ok(), u64::from(ia));
         classify(pair, margin(pair), |[wide, proof]| {
             if many(ia) || many(ib) {
@@ -273,11 +274,17 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
                 if resting && !(step + first).is_multiple_of(RETEST_EVERY) {
                     return [gap > wide, gap <= wide && wide > proof && gap > proof];
                 }
+                // Proved apart before by more than the bodies have moved since and the margin:
+                // GJK would prove it again (the pair keeps its record).
+                if apart.is_some_and(|x| x.still_apart(b, meshes, (ia as usize, ib as usize)) > wide) {
+                    return [true, true];
+                }
                 // One GJK bound answers both margins (its first direction is the line of
                 // centres, which `separated` tries).
                 let (bound, first) = distance_bound_from(shape(ia), shape(ib), wide, from);
-                *ends = Some(first);
                 let bound = bound.max(gap);
+                let apart = (bound > wide).then(|| Apart::at(bound, b, (ia as usize, ib as usize)));
+                *out = Some(Kept { ends: first, apart });
                 return [bound > wide, bound <= wide && wide > proof && bound > proof];
             }
             let (pa, pb) = (posed.get(ia), posed.get(ib));
@@ -285,10 +292,11 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
             [by_wide, !by_wide && wide > proof && separated(pa, pb, proof)]
         });
     });
-    starts.clear();
-    // A pair GJK skipped this step keeps its old starts.
-    let ends = starts_out.iter().zip(starts_in.iter()).map(|(now, old)| now.or(*old));
-    starts.extend(ctx.pairs.iter().zip(ends).filter_map(|(p, e)| e.map(|e| ((p.a, p.b), e))));
+    // A pair GJK skipped this step keeps its old record.
+    next.clear();
+    let kept = starts_out.iter().zip(cached.iter()).map(|(now, &e)| now.as_ref().or_else(|| old(e)));
+    next.extend(ctx.pairs.iter().zip(kept).filter_map(|(p, k)| k.map(|k| ((p.a, p.b), *k))));
+    std::mem::swap(starts, next);
     ctx.pairs.retain(|p| p.state != PairState::Separated);
     touching.clear();
     let touches = |p: &&Pair| p.is_candidate() && (many(p.a) || many(p.b));
@@ -366,11 +374,56 @@ struct PruneScratch {
     /// Each body's extreme vertices along the world axes when last bounded: where the next
     /// step's walks start (a resting body's are where they end).
     hints: Vec<[u32; 6]>,
-    /// Where each pair's GJK first walks ended, in pair order: its next GJK starts there.
-    starts: Vec<((u32, u32), [u32; 2])>,
-    /// Scratch: each pair's entry of `starts`, and where its GJK's first walks end this step.
-    starts_in: Vec<Option<[u32; 2]>>,
-    starts_out: Vec<Option<[u32; 2]>>,
+    /// Each pair's last GJK (`Kept`), in pair order.
+    starts: Vec<((u32, u32), Kept)>,
+    /// Scratch: each pair's GJK this step, and the next `starts`.
+    starts_out: Vec<Option<Kept>>,
+    next: Vec<((u32, u32), Kept)>,
+}
+
+/// What `prune` keeps of a pair's last GJK: where its first walks ended (the next GJK starts
+/// there) and, when it proved the pair apart, by how much and where.
+#[derive(Clone, Copy, Debug)]
+struct Kept {
+    ends: [u32; 2],
+    apart: Option<Apart>,
+}
+
+/// A lower bound on a pair's distance [m] at the poses and meshes it was found for.
+#[derive(Clone, Copy, Debug)]
+struct Apart {
+    bound: Scalar,
+    poses: ([Vector; 2], [Quat; 2]),
+    meshes: [MeshId; 2],
+}
+
+impl Apart {
+    /// Pair (A, B)'s `bound` at their current poses.
+    fn at(bound: Scalar, b: &Bodies, (ia, ib): (usize, usize)) -> Self {
+        Self { bound, poses: poses(b, ia, ib), meshes: [b.mesh[ia], b.mesh[ib]] }
+    }
+
+    /// A lower bound on the pair's distance now [m]: the old bound less the farthest any
+    /// point of either body has moved since (its centre's shift plus the chord its turn sweeps
+    /// at the mesh's radius), less a slack far above round-off. −∞ for other meshes.
+    fn still_apart(&self, b: &Bodies, meshes: &MeshTable, (ia, ib): (usize, usize)) -> Scalar {
+        if self.meshes != [b.mesh[ia], b.mesh[ib]] {
+            return Scalar::NEG_INFINITY;
+        }
+        self.bound_at(poses(b, ia, ib), [ia, ib].map(|i| meshes.get(b.mesh[i]).radius))
+    }
+
+    /// `still_apart` for A and B now at `now` (centres, orientations), of radii `radii` [m].
+    fn bound_at(&self, now: ([Vector; 2], [Quat; 2]), radii: [Scalar; 2]) -> Scalar {
+        let moved = |k: usize| {
+            // The chord of a turn by θ is 2 sin(θ/2) r, and |q·q'| = cos(θ/2); the 1e-15 covers
+            // the round-off of 1 − c² near c = 1.
+            let c = self.poses.1[k].dot(now.1[k]).abs().min(1.0);
+            let chord = 2.0 * ((1.0 - c * c).max(0.0) + 1e-15).sqrt() * radii[k];
+            (now.0[k] - self.poses.0[k]).length() + chord
+        };
+        self.bound - moved(0) - moved(1) - 1e-9 * (1.0 + radii[0] + radii[1])
+    }
 }
 
 #[cfg(test)]
@@ -429,6 +482,44 @@ mod tests {
             count[usize::from(apart(pose(Vector::ZERO, r1), pose(x, r2)))] += 1;
         }
         assert!(count[0] > 100 && count[1] > 100, "both answers occur: {count:?}");
+    }
+
+    #[test]
+    fn a_pair_proved_apart_stays_apart_by_its_bound_less_how_far_it_moved() {
+        use crate::collision::hull::distance_bound;
+        let (v, t) = crate::model::shapes::icosphere_raw(0.5, 2);
+        let mesh = Arc::new(ConvexMesh::new(v, t).expect("an icosphere is valid").0);
+        let mut rng = crate::rng::SplitMix64::new(17);
+        let (mut checked, mut moved) = (0, 0);
+        for _ in 0..400 {
+            let mut draw = || Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+            let (xa, xb) = (draw() * 0.3, Vector::new(1.3, 0.0, 0.0) + draw() * 0.3);
+            let (ra, rb) = (draw() * 180.0, draw() * 180.0);
+            let (dxa, dxb, dra, drb) = (draw() * 0.05, draw() * 0.05, draw() * 10.0, draw() * 10.0);
+            let at = |x: Vector, r: Vector| Posed::new(Arc::clone(&mesh), &pose(x, r));
+            let (a, b) = (at(xa, ra), at(xb, rb));
+            let bound = distance_bound(Shape::Posed(&a), Shape::Posed(&b), 10.0);
+            if bound <= 0.0 {
+                continue;
+            }
+            let then = Apart {
+                bound,
+                poses: ([a.position, b.position], [a.orientation, b.orientation]),
+                meshes: [MeshId(0); 2],
+            };
+            let (a, b) = (at(xa + dxa, ra + dra), at(xb + dxb, rb + drb));
+            let now = then.bound_at(([a.position, b.position], [a.orientation, b.orientation]), [mesh.radius; 2]);
+            // The claim holds: GJK proves them apart by just under it (the true distance is more).
+            if now > 0.0 {
+                assert!(proved_apart(&a, &b, now - 1e-9), "claimed {now}, from {bound}");
+                checked += 1;
+            }
+            // Unmoved, the bound is the old one less the slacks only (under 0.1 µm).
+            let still = then.bound_at(then.poses, [mesh.radius; 2]);
+            assert!(still < bound && still > bound - 1e-7, "{still} from {bound}");
+            moved += usize::from(now < bound - 0.01);
+        }
+        assert!(checked > 200 && moved > 300, "both claims and motions are tried: {checked} {moved}");
     }
 
     #[test]

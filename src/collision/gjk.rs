@@ -66,10 +66,17 @@ impl Shape<'_> {
         }
     }
 
-    fn lowest_seeded(&self, dir: Vector) -> u32 {
+    /// `lowest` from the seed of the cube direction nearest `−dir`.
+    fn lowest_seeded(&self, dir: Vector) -> (u32, Vector) {
         match self {
-            Self::Posed(p) => lowest_vertex_seeded(p, dir).0,
-            Self::Placed(p) => p.lowest_seeded(dir),
+            Self::Posed(p) => {
+                let i = lowest_vertex_seeded(p, dir).0;
+                (i, p.vertices[i as usize])
+            }
+            Self::Placed(p) => {
+                let i = p.lowest_seeded(dir);
+                (i, p.vertex(i))
+            }
         }
     }
 }
@@ -98,11 +105,14 @@ pub fn distance_bound_from(a: Shape, b: Shape, enough: Scalar, starts: Option<[u
     // Support of the Minkowski difference A − B along d: A's highest minus B's lowest.
     let (ca, cb) = (a.centre(), b.centre());
     let centre = cb - ca;
-    let (mut sa, mut sb) = match starts {
-        Some([i, j]) => (a.lowest(-centre, i).0, b.lowest(centre, j).0),
+    let ((mut sa, wa), (mut sb, wb)) = match starts {
+        Some([i, j]) => (a.lowest(-centre, i), b.lowest(centre, j)),
         None => (a.lowest_seeded(-centre), b.lowest_seeded(centre)),
     };
     let first = [sa, sb];
+    // The first support direction is this line of centres, whose walks just ended at these
+    // vertices: walking again from them would stay there.
+    let mut first_support = Some(wa - wb);
     let mut support = |d: Vector| {
         let (i, wa) = a.lowest(-d, sa);
         let (j, wb) = b.lowest(d, sb);
@@ -116,7 +126,7 @@ pub fn distance_bound_from(a: Shape, b: Shape, enough: Scalar, starts: Option<[u
         return (bound, first);
     }
     for _ in 0..GJK_ITERATIONS {
-        let w = support(-v);
+        let w = first_support.take().unwrap_or_else(|| support(-v));
         let length = v.length();
         // Every point of A − B lies at least v·w/|v| from the origin along v's direction.
         bound = bound.max(v.dot(w) / length);

@@ -344,6 +344,10 @@ struct Near {
     stack: Vec<u32>,
     /// B's edges' arcs on the Gauss map (`best_among`).
     arcs: Vec<(Vector, Vector)>,
+    /// True when `faces` is every face (an unlimited reach).
+    all: bool,
+    /// Scratch of `best_grouped`: each plane group's bound and index.
+    groups: Vec<(Scalar, u32)>,
 }
 
 thread_local! {
@@ -380,6 +384,7 @@ fn near(p: &Posed, (wide, tight): (&Region, &Region), from: u32, out: &mut Near)
     out.start = from;
     out.faces.clear();
     out.edges.clear();
+    out.all = wide.is_everywhere();
     if !is_many_faced(p) {
         out.faces.extend(0..m.planes.len() as u32);
         out.edges.extend(0..m.feature_edges.len() as u32);
@@ -396,7 +401,11 @@ fn near(p: &Posed, (wide, tight): (&Region, &Region), from: u32, out: &mut Near)
         // The flood would reach every vertex (the mesh is connected), so every face: the same
         // lists without the flood.
         faces.extend(0..m.planes.len() as u32);
-        for i in 0..m.vertices.len() as u32 {
+        // An empty tight box (bodies apart along a world axis) holds no vertex: only the
+        // start's edges.
+        let (lo, hi) = tight.bounds;
+        let vertices = if lo.cmpgt(hi).any() { from..from + 1 } else { 0..m.vertices.len() as u32 };
+        for i in vertices {
             if i == from || within(tight, i) {
                 edge_set.extend(row(&m.vertex_edges, &m.vertex_edge_start, i));
             }
@@ -455,6 +464,66 @@ impl Rough {
         let pl = &q.mesh.planes[f as usize];
         self.points[0].dot(pl.normal).min(self.points[1].dot(pl.normal)) - pl.offset + self.slack
     }
+}
+
+/// Where a walk over `p` along `normal` starts: the start vertex or the last walk's end,
+/// whichever is lower along it (faces in a row lie near each other), and its value. Any
+/// vertex bounds the lowest, so the lower one skips more faces and walks fewer steps, to the
+/// same lowest vertex.
+fn pick(p: &Posed, normal: Vector, (start, last): (u32, u32)) -> (u32, Scalar) {
+    let (at_start, at_last) = (p.vertices[start as usize].dot(normal), p.vertices[last as usize].dot(normal));
+    if at_last < at_start { (last, at_last) } else { (start, at_start) }
+}
+
+/// Among every face of many-faced `q`, the one along whose normal `p` lies farthest out (or
+/// sinks least), by more than `floor` if given: the face, its world normal and that
+/// separation. The answer of a scan in index order keeping only strict gains (the first
+/// face of the largest separation), found by visiting `q`'s plane groups (`PlaneGroup`) best
+/// bound first and stopping at the first whose bound cannot reach the best so far, so every
+/// face that could win is walked and, ties broken by index, the same one wins. `start` is a
+/// vertex of `p` near `q`; `order` is scratch.
+fn best_grouped(
+    q: &Posed,
+    p: &Posed,
+    start: u32,
+    floor: Option<Scalar>,
+    order: &mut Vec<(Scalar, u32)>,
+) -> Option<(u32, Vector, Scalar)> {
+    let mut rough = Rough::of(q, [p.vertices[start as usize]; 2])?;
+    let (point, groups) = (rough.points[0], &q.mesh.plane_groups);
+    order.clear();
+    order.extend(groups.iter().enumerate().map(|(k, g)| (g.bound(point, point.length()), k as u32)));
+    order.sort_unstable_by(|x, y| y.0.total_cmp(&x.0));
+    let mut top: Option<(Scalar, u32, Vector)> = None;
+    // True when face `f` (or a group, as face 0) bounded by `bound` cannot win: not above the
+    // floor, below the best, or level with it at a later face.
+    let out = |top: &Option<(Scalar, u32, Vector)>, bound: Scalar, f: u32| {
+        floor.is_some_and(|x| bound <= x) || top.is_some_and(|t| bound < t.0 || (bound == t.0 && f > t.1))
+    };
+    let mut last = start;
+    for &(bound, g) in order.iter() {
+        // The group's bound holds in `q`'s frame; the rough slack covers the world's round-off.
+        if out(&top, bound + rough.slack, 0) {
+            break; // and every later group, bounded lower
+        }
+        for &f in &groups[g as usize].planes {
+            if out(&top, rough.bound(q, f), f) {
+                continue;
+            }
+            let pl = q.plane(f as usize);
+            let (from, at) = pick(p, pl.normal, (start, last));
+            if out(&top, at - pl.offset, f) {
+                continue;
+            }
+            let (end, lowest) = lowest_vertex(p, pl.normal, from);
+            last = end;
+            rough.set_last(q, p.vertices[end as usize]);
+            if !out(&top, lowest - pl.offset, f) {
+                top = Some((lowest - pl.offset, f, pl.normal));
+            }
+        }
+    }
+    top.map(|(separation, f, normal)| (f, normal, separation))
 }
 
 /// Row `i` of a flat list with start offsets.
@@ -527,47 +596,55 @@ fn best_among(a: &Posed, b: &Posed, (na, nb): (&Near, &mut Near), (margin, reach
                 *best = Some(Axis { normal, separation, reference });
             }
         };
-    // Each walk starts at the start vertex or the last walk's end, whichever is lower along
-    // the face's normal (faces in a row lie near each other): any vertex bounds the lowest,
-    // so the lower one skips more faces and walks fewer steps, to the same lowest vertex.
-    let pick = |p: &Posed, normal: Vector, (start, last): (u32, u32)| {
-        let (at_start, at_last) = (p.vertices[start as usize].dot(normal), p.vertices[last as usize].dot(normal));
-        if at_last < at_start { (last, at_last) } else { (start, at_start) }
-    };
-    let mut last = na.start;
-    let mut rough = Rough::of(b, [a.vertices[na.start as usize]; 2]);
-    for &f in &nb.faces {
-        if rough.as_ref().is_some_and(|r| !wins(&best, r.bound(b, f), 0.0)) {
-            continue;
-        }
-        let pl = b.plane(f as usize);
-        let (from, bound) = pick(a, pl.normal, (na.start, last));
-        if wins(&best, bound - pl.offset, 0.0) {
-            let (end, lowest) = lowest_vertex(a, pl.normal, from);
-            last = end;
-            if let Some(r) = rough.as_mut() {
-                r.set_last(b, a.vertices[end as usize]);
+    let mut groups = std::mem::take(&mut nb.groups);
+    if nb.all && is_many_faced(b) {
+        let face = best_grouped(b, a, na.start, None, &mut groups);
+        best = face.map(|(f, normal, separation)| Axis { normal, separation, reference: Reference::FaceOfB(f) });
+    } else {
+        let mut last = na.start;
+        let mut rough = Rough::of(b, [a.vertices[na.start as usize]; 2]);
+        for &f in &nb.faces {
+            if rough.as_ref().is_some_and(|r| !wins(&best, r.bound(b, f), 0.0)) {
+                continue;
             }
-            consider(&mut best, pl.normal, lowest - pl.offset, Reference::FaceOfB(f), 0.0);
+            let pl = b.plane(f as usize);
+            let (from, bound) = pick(a, pl.normal, (na.start, last));
+            if wins(&best, bound - pl.offset, 0.0) {
+                let (end, lowest) = lowest_vertex(a, pl.normal, from);
+                last = end;
+                if let Some(r) = rough.as_mut() {
+                    r.set_last(b, a.vertices[end as usize]);
+                }
+                consider(&mut best, pl.normal, lowest - pl.offset, Reference::FaceOfB(f), 0.0);
+            }
         }
     }
-    let mut last = nb.start;
-    let mut rough = Rough::of(a, [b.vertices[nb.start as usize]; 2]);
-    for &f in &na.faces {
-        if rough.as_ref().is_some_and(|r| !wins(&best, r.bound(a, f), PREFER * margin)) {
-            continue;
+    // With no preference (`margin` 0) A's faces, too, need only beat the best strictly.
+    if na.all && PREFER * margin == 0.0 && is_many_faced(a) {
+        let floor = best.map(|x| x.separation);
+        if let Some((f, n, separation)) = best_grouped(a, b, nb.start, floor, &mut groups) {
+            best = Some(Axis { normal: -n, separation, reference: Reference::FaceOfA(f) });
         }
-        let pl = a.plane(f as usize);
-        let (from, bound) = pick(b, pl.normal, (nb.start, last));
-        if wins(&best, bound - pl.offset, PREFER * margin) {
-            let (end, lowest) = lowest_vertex(b, pl.normal, from);
-            last = end;
-            if let Some(r) = rough.as_mut() {
-                r.set_last(a, b.vertices[end as usize]);
+    } else {
+        let mut last = nb.start;
+        let mut rough = Rough::of(a, [b.vertices[nb.start as usize]; 2]);
+        for &f in &na.faces {
+            if rough.as_ref().is_some_and(|r| !wins(&best, r.bound(a, f), PREFER * margin)) {
+                continue;
             }
-            consider(&mut best, -pl.normal, lowest - pl.offset, Reference::FaceOfA(f), PREFER * margin);
+            let pl = a.plane(f as usize);
+            let (from, bound) = pick(b, pl.normal, (nb.start, last));
+            if wins(&best, bound - pl.offset, PREFER * margin) {
+                let (end, lowest) = lowest_vertex(b, pl.normal, from);
+                last = end;
+                if let Some(r) = rough.as_mut() {
+                    r.set_last(a, b.vertices[end as usize]);
+                }
+                consider(&mut best, -pl.normal, lowest - pl.offset, Reference::FaceOfA(f), PREFER * margin);
+            }
         }
     }
+    nb.groups = groups;
     // B's edges' arcs, turned once for all of A's edges.
     let mut arcs_b = std::mem::take(&mut nb.arcs);
     arcs_b.clear();

@@ -273,17 +273,19 @@ pub fn support_point(a: &Posed, b: &Posed, axis: &Axis) -> Vector {
     let n = axis.normal;
     let tol = 1e-6 * a.mesh.radius.max(b.mesh.radius);
     let feature = |p: &Posed, dir: Vector| {
-        let lowest = lowest_vertices(p, dir, tol);
-        let mut out = [Vector::ZERO; 2];
-        let (mut count, mut sum) = (0, Vector::ZERO);
-        for v in lowest {
-            if count < 2 {
-                out[count] = v;
+        LOWEST.with_borrow_mut(|(found, stack)| {
+            lowest_vertices(p, dir, tol, (found, stack));
+            let mut out = [Vector::ZERO; 2];
+            let (mut count, mut sum) = (0, Vector::ZERO);
+            for v in found.iter().map(|&i| p.vertices[i as usize]) {
+                if count < 2 {
+                    out[count] = v;
+                }
+                count += 1;
+                sum += v;
             }
-            count += 1;
-            sum += v;
-        }
-        (out, count, sum / count.max(1) as Scalar)
+            (out, count, sum / count.max(1) as Scalar)
+        })
     };
     let ((ea, ca, ma), (eb, cb, mb)) = (feature(a, n), feature(b, -n));
     if ca == 2 && cb == 2 {
@@ -294,18 +296,27 @@ pub fn support_point(a: &Posed, b: &Posed, axis: &Axis) -> Vector {
     }
 }
 
-/// The vertices of `p` within `tol` of the lowest along `dir`, in index order: all of them
-/// scanned, or for a many-faced body found by walking to the lowest and flooding over
-/// neighbours (the vertices below any level of a linear function are connected on a convex
-/// hull, so the flood reaches each).
-fn lowest_vertices(p: &Posed, dir: Vector, tol: Scalar) -> Vec<Vector> {
+thread_local! {
+    /// `support_point`'s buffers (`lowest_vertices`), one pair a thread: no allocation a call.
+    static LOWEST: std::cell::RefCell<(Vec<u32>, Vec<u32>)> = std::cell::RefCell::default();
+}
+
+/// The vertices of `p` within `tol` of the lowest along `dir`, in index order, into `found`
+/// (`stack` is scratch): all of them scanned, or for a many-faced body found by walking to the
+/// lowest and flooding over neighbours (the vertices below any level of a linear function are
+/// connected on a convex hull, so the flood reaches each).
+fn lowest_vertices(p: &Posed, dir: Vector, tol: Scalar, (found, stack): (&mut Vec<u32>, &mut Vec<u32>)) {
+    found.clear();
     if !is_many_faced(p) {
         let low = p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
-        return p.vertices.iter().copied().filter(|v| v.dot(dir) <= low + tol).collect();
+        found.extend((0..p.vertices.len() as u32).filter(|&i| p.vertices[i as usize].dot(dir) <= low + tol));
+        return;
     }
     let m = &p.mesh;
     let (first, low) = crate::collision::hull::lowest_vertex_seeded(p, dir);
-    let (mut found, mut stack) = (vec![first], vec![first]);
+    found.push(first);
+    stack.clear();
+    stack.push(first);
     while let Some(i) = stack.pop() {
         for &j in &m.neighbours[m.neighbour_start[i as usize] as usize..m.neighbour_start[i as usize + 1] as usize] {
             if p.vertices[j as usize].dot(dir) <= low + tol && !found.contains(&j) {
@@ -315,7 +326,6 @@ fn lowest_vertices(p: &Posed, dir: Vector, tol: Scalar) -> Vec<Vector> {
         }
     }
     found.sort_unstable();
-    found.iter().map(|&i| p.vertices[i as usize]).collect()
 }
 
 /// The closest points of segments p0p1 and q0q1 (Ericson, "Real-Time Collision Detection",
