@@ -389,6 +389,11 @@ struct Kept {
     apart: Option<Apart>,
 }
 
+/// A's and B's centres and orientations.
+fn poses(b: &Bodies, ia: usize, ib: usize) -> ([Vector; 2], [Quat; 2]) {
+    ([b.position[ia], b.position[ib]], [b.orientation[ia], b.orientation[ib]])
+}
+
 /// A lower bound on a pair's distance [m] at the poses and meshes it was found for.
 #[derive(Clone, Copy, Debug)]
 struct Apart {
