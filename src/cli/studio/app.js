@@ -170,6 +170,24 @@ function facingBoxGeometry([hx, hy, hz]) {
   return g;
 }
 
+// A box seen from outside shows at most three faces, around the corner nearest the eye: drawn
+// as that hexagon, 7 shared corners and 6 triangles, for the eye in the + octant of the body's
+// axes and mirrored into the eye's octant in the vertex shader (`HEXAGON`). Each triangle takes
+// its face's light from its last corner (a flat varying): the ring of corners is ordered so
+// that each outer corner is the last of exactly one triangle.
+function hexagonBoxGeometry([hx, hy, hz]) {
+  // The near corner, then the ring around it; each ring corner with the normal of the face
+  // whose triangle it ends.
+  const corners = [[1, 1, 1], [1, 1, -1], [-1, 1, -1], [-1, 1, 1], [-1, -1, 1], [1, -1, 1], [1, -1, -1]];
+  const normals = [[1, 0, 0], [1, 0, 0], [0, 1, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1], [1, 0, 0]];
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.Float32BufferAttribute(corners.flatMap(([x, y, z]) => [x * hx, y * hy, z * hz]), 3));
+  g.setAttribute('normal', new THREE.Float32BufferAttribute(normals.flat(), 3));
+  // Faces +y (1 2 3), +z (3 4 5), +x (5 6 1), each as two triangles from the near corner.
+  g.setIndex([0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5, 0, 5, 6, 0, 6, 1]);
+  return g;
+}
+
 // `count` copies of `geometry`, each vertex tagged with its copy's index, coloured per copy.
 function mergedGeometry(geometry, members, coloured) {
   const v = geometry.getAttribute('position').count;
@@ -179,6 +197,13 @@ function mergedGeometry(geometry, members, coloured) {
     const out = new Float32Array(a.array.length * count);
     for (let k = 0; k < count; k++) out.set(a.array, k * a.array.length);
     g.setAttribute(name, new THREE.BufferAttribute(out, a.itemSize));
+  }
+  const index = geometry.getIndex();
+  if (index) {
+    const n = index.array.length;
+    const out = new (v * count > 65535 ? Uint32Array : Uint16Array)(n * count);
+    for (let k = 0; k < count; k++) for (let j = 0; j < n; j++) out[k * n + j] = index.array[j] + k * v;
+    g.setIndex(new THREE.BufferAttribute(out, 1));
   }
   const body = new Float32Array(v * count);
   members.forEach((_, k) => body.fill(k, k * v, (k + 1) * v));
@@ -199,7 +224,7 @@ function mergedGeometry(geometry, members, coloured) {
 // placed by its member's pose (two texels: position, then the quaternion x y z w). The faces are
 // flat (a vertex carries its face's normal) and a hemisphere and a sun light by the normal only,
 // so this draws what MeshLambertMaterial draws, in a shader short enough to hold `FACING`.
-function posedMaterial({ color, opacity = 1, vertexColors = false, facing = false }, poses) {
+function posedMaterial({ color, opacity = 1, vertexColors = false, facing = false, hexagon = false }, poses) {
   const scaled = (c, k) => c.clone().multiplyScalar(k);
   return new THREE.ShaderMaterial({
     uniforms: {
@@ -212,7 +237,10 @@ function posedMaterial({ color, opacity = 1, vertexColors = false, facing = fals
       sunColor: { value: scaled(sun.color, sun.intensity) },
       sunDir: { value: sun.position.clone().sub(sun.target.position).normalize() },
     },
-    defines: facing ? { FACING: '' } : {},
+    defines: hexagon ? { HEXAGON: '' } : facing ? { FACING: '' } : {},
+    // Mirrored into an octant with one or three axes flipped, a hexagon is wound the other way;
+    // only the faces towards the eye are drawn, so there is nothing to cull.
+    side: hexagon ? THREE.DoubleSide : THREE.FrontSide,
     vertexColors,
     transparent: opacity < 1,
     depthWrite: opacity >= 1,
@@ -222,7 +250,11 @@ attribute float axis;
 #endif
 uniform highp sampler2D poses;
 uniform vec3 tint, sky, ground, up, sunColor, sunDir;
+#ifdef HEXAGON
+flat varying vec3 lit;
+#else
 varying vec3 lit;
+#endif
 vec3 turn(vec4 q, vec3 v) { return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v); }
 vec4 poseTexel(int i) { return texelFetch(poses, ivec2(i % ${POSE_WIDTH}, i / ${POSE_WIDTH}), 0); }
 void main() {
@@ -237,6 +269,12 @@ void main() {
   else if (axis < 1.5) { if (eye.y < 0.0) { local.xy = -local.xy; nl.xy = -nl.xy; } }
   else if (eye.z < 0.0) { local.yz = -local.yz; nl.yz = -nl.yz; }
 #endif
+#ifdef HEXAGON
+  vec3 eye = turn(vec4(-q.xyz, q.w), cameraPosition - at.xyz);
+  vec3 side = vec3(eye.x < 0.0 ? -1.0 : 1.0, eye.y < 0.0 ? -1.0 : 1.0, eye.z < 0.0 ? -1.0 : 1.0);
+  local *= side;
+  nl *= side;
+#endif
   vec3 n = normalize(turn(q, nl));
   vec3 base = tint;
 #ifdef USE_COLOR
@@ -247,7 +285,11 @@ void main() {
   gl_Position = projectionMatrix * modelViewMatrix * vec4(turn(q, local) + at.xyz, 1.0);
 }`,
     fragmentShader: `uniform float opacity;
+#ifdef HEXAGON
+flat varying vec3 lit;
+#else
 varying vec3 lit;
+#endif
 void main() {
   gl_FragColor = vec4(lit, opacity);
 #include <tonemapping_fragment>
@@ -283,10 +325,13 @@ async function loadMeshes() {
       g.poses.needsUpdate = true;
       const box = boxHalfExtents(m.meshes[g.mesh]);
       const facing = box !== null;
+      // Translucent (fixed) boxes keep the three faces drawn one-sided: with depth writes off, a
+      // face drawn from behind would show through.
+      const hexagon = facing && !g.fixed;
       const material = g.fixed
-        ? posedMaterial({ color: 0xa0a0a8, opacity: 0.35, facing }, g.poses)
-        : posedMaterial({ color: 0xffffff, vertexColors: true, facing }, g.poses);
-      const drawn = facing ? facingBoxGeometry(box) : geometries[g.mesh];
+        ? posedMaterial({ color: 0xa0a0a8, opacity: 0.35, facing, hexagon }, g.poses)
+        : posedMaterial({ color: 0xffffff, vertexColors: true, facing, hexagon }, g.poses);
+      const drawn = hexagon ? hexagonBoxGeometry(box) : facing ? facingBoxGeometry(box) : geometries[g.mesh];
       g.draw = new THREE.Mesh(mergedGeometry(drawn, g.members, !g.fixed), material);
       g.draw.frustumCulled = false;
       scene.add(g.draw);
@@ -453,6 +498,10 @@ function fitCamera(f) {
 // a headless browser to report.
 let fpsFrames = 0;
 let drawnFrames = 0;
+// Where the page's own second goes, for ?log=1: animation frames, `/api/frame` requests and their
+// round trips, placing the poses, and the render call (what it hands the GPU process, not the
+// drawing itself, which runs there) [ms].
+const spent = { animation: 0, requests: 0, request: 0, place: 0, render: 0 };
 let fpsSince = performance.now();
 function countFrame() {
   fpsFrames++;
@@ -466,10 +515,16 @@ function countSecond() {
     $('hud').dataset.fps = fps.toFixed(1);
     $('hud').dataset.drawnFps = drawn.toFixed(1);
     if (params.get('log') === '1') {
-      console.log(`studio-fps frames=${fps.toFixed(1)} drawn=${drawn.toFixed(1)} bodies=${groupOf.length} step=${$('time').dataset.step}`);
+      const per = (ms, n) => (ms / Math.max(n, 1)).toFixed(2);
+      console.log(
+        `studio-fps frames=${fps.toFixed(1)} drawn=${drawn.toFixed(1)} bodies=${groupOf.length} step=${$('time').dataset.step}` +
+          ` animation=${spent.animation} request_ms=${per(spent.request, spent.requests)} place_ms=${per(spent.place, fpsFrames)}` +
+          ` render_ms=${per(spent.render, drawnFrames)} scale=${renderer ? renderer.getPixelRatio() : 0}`,
+      );
     }
     fpsFrames = 0;
     drawnFrames = 0;
+    for (const k of Object.keys(spent)) spent[k] = 0;
     fpsSince = now;
   }
 }
@@ -480,8 +535,11 @@ async function fetchFrame() {
   if (frameInFlight || loadingMeshes) return;
   frameInFlight = true;
   try {
+    const asked = performance.now();
     const r = await fetch('/api/frame');
     const buf = await r.arrayBuffer();
+    spent.request += performance.now() - asked;
+    spent.requests++;
     const v = Number(r.headers.get('X-Version'));
     if (v !== version) {
       await loadMeshes();
@@ -495,7 +553,9 @@ async function fetchFrame() {
     appliedKey = key;
     const f = new Float32Array(buf);
     lastFrame = f;
+    const placing = performance.now();
     applyFrame(f);
+    spent.place += performance.now() - placing;
     if ($('show-contacts').checked) fetchContacts().catch(() => {});
     if (fitted !== sceneName + '/' + version && (fitted === '' || !fitted.startsWith(sceneName + '/'))) {
       fitCamera(f);
@@ -526,11 +586,14 @@ function resize() {
 }
 
 function animate() {
+  spent.animation++;
   fetchFrame();
   resize();
   controls?.update();
   if (renderer && dirty) {
+    const rendering = performance.now();
     renderer.render(scene, camera);
+    spent.render += performance.now() - rendering;
     dirty = false;
     drawnFrames++;
   }
