@@ -496,16 +496,32 @@ pub(super) fn arrange(joints: &mut Joints, write_out: bool) {
     let n = joints.joints.len();
     joints.impulses.resize(n, JointImpulses::default());
     joints.geometry.resize(n, Geometry::default());
-    let Joints { joints: list, impulses, ends, anchored, general, limited, system, spans, carry, mixed, .. } =
-        &mut *joints;
+    let Joints {
+        joints: list,
+        impulses,
+        ends,
+        anchored,
+        general,
+        limited,
+        system,
+        spans,
+        carry,
+        mixed,
+        held,
+        lone,
+        rows,
+        ..
+    } = &mut *joints;
     anchored.clear();
     general.clear();
+    lone.clear();
+    rows.clear();
     // How many joints hold each free body: an anchored joint must be its body's only one.
     let free = |e: &End| e.free.then_some(e.slot as usize);
     let top = ends.iter().flatten().filter_map(free).max().map_or(0, |s| s + 1);
-    let mut held = vec![0u32; top];
+    held.clear();
+    held.resize(top, 0);
     ends.iter().flatten().filter_map(free).for_each(|s| held[s] += 1);
-    let (mut lone, mut rows) = (Vec::new(), Vec::with_capacity(n));
     for (k, joint) in list.iter().enumerate() {
         let alone = write_out && ends[k].iter().filter_map(free).all(|s| held[s] == 1);
         // An anchored joint's rows are not the system's.
@@ -524,7 +540,7 @@ pub(super) fn arrange(joints: &mut Joints, write_out: bool) {
     anchored.extend(lone.chunks(super::LANES).map(Anchored::new));
     limited.clear();
     limited.extend((0..n as u32).filter(|&k| one_by_one(&list[k as usize].kind)));
-    system.set_nodes(ends, rows.into_iter());
+    system.set_nodes(ends, rows.iter().copied());
     spans.clear();
     spans.extend(system.spans().map(|(k, r)| (k, r.start, r.len())));
     carry.resize(system.rows.len(), Carry::Axial);

@@ -252,6 +252,11 @@ pub struct Joints {
     pub(crate) anchored: Vec<super::anchored::Anchored>,
     pub(crate) general: Vec<u32>,
     pub(crate) limited: Vec<u32>,
+    /// `arrange`'s per-step scratch, kept to spare three allocations a step: joints holding
+    /// each free body, the lone anchored joints, each joint's rows in the system.
+    pub(crate) held: Vec<u32>,
+    pub(crate) lone: Vec<super::anchored::AnchoredJoint>,
+    pub(crate) rows: Vec<usize>,
     /// The bodies moved since the last refresh; the rows hold impulses not yet stored.
     pub(crate) stale: bool,
     pub(crate) rows_valid: bool,
