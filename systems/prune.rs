@@ -2,7 +2,7 @@
 //! early-out that keeps the paper's three tests as the deciders of every contact, because none
 //! of them can fire on a pair it removes (proof on `separated`).
 
-use crate::collision::contact::{Pair, PairState};
+use crate::collision::contact::{Contact, Feature, Pair, PairState};
 use crate::collision::hull::{Placed, Shape, distance_bound_from, is_many_faced, lowest_vertex_seeded, proved_apart};
 use crate::collision::posed::Posed;
 use crate::math::{Mat3, Quat, Scalar, Vector};
@@ -196,7 +196,8 @@ fn extent(p: &Posed, axis: Vector) -> (Scalar, Scalar) {
 /// pairs are tested from their poses (`boxes_separated_by`) before anything is posed; the rest
 /// by `separated` on posed meshes.
 ///
-/// Last, the resting pairs whose points `solve` will recycle skip the tests (`skip_recycled`).
+/// First, the resting pairs of small meshes whose points `solve` will recycle skip the proofs
+/// and the tests (`take_recycled`), last those with a many-faced body skip the tests.
 ///
 /// - Reads: `ctx.pairs` (`Candidate` only), `ctx.bodies`, `ctx.meshes`, `ctx.posed`, `solve`'s
 ///   warm-start cache.
@@ -210,6 +211,11 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let mut touching = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().touching);
     let step = ctx.step;
     ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut speculative);
+    // Resting pairs of small meshes that keep their points skip the proofs too (`take_recycled`).
+    let judged = judge_recycling(ctx);
+    if judged {
+        take_recycled(ctx, true);
+    }
     let (b, meshes, params, dt) = (&ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
     let margin = |p: &Pair| pair_margin(p, b, meshes, params, (dt, &speculative));
     let as_box = |i: u32| {
@@ -236,7 +242,7 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let PruneScratch { wanted, bounds, hints, starts, next, starts_out, cached, .. } =
         ctx.scratch.get_mut::<PruneScratch>();
     // Each pair's GJK starts from where last step's first walks ended (its entry in `starts`;
-    // `cached` is scratch here, `skip_recycled` fills it afresh).
+    // `cached` is scratch here, `take_recycled` fills it afresh).
     cache_entries(starts, &ctx.pairs, cached);
     starts_out.clear();
     starts_out.resize(ctx.pairs.len(), None);
@@ -303,20 +309,20 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     touching.extend(ctx.pairs.iter().filter(touches).map(|p| (p.a, p.b)));
     let scratch = ctx.scratch.get_mut::<PruneScratch>();
     (scratch.speculative, scratch.touching) = (speculative, touching);
-    skip_recycled(ctx);
+    if judged {
+        take_recycled(ctx, false);
+    }
 }
 
-/// Takes the pairs whose points `solve` will recycle out of the paper's tests: each is given
-/// the verdict the tests gave when they last ran on it and the recycled contact
-/// (`solve::recycled_contact`), which is all `solve` reads of them there, so its results are
-/// the same bits (docs/physics.md §6.3). Only pairs `solve` holds, and only while its
-/// warm-start cache is last step's. Whether each resting pair with a cache entry keeps its
-/// points is worked out here once and left for `solve` (`SolveScratch::recycling`).
-fn skip_recycled(ctx: &mut StepContext) {
+/// Works out, once a step, whether each resting pair with an entry in `solve`'s warm-start
+/// cache keeps its points, and leaves the answer for `solve` (`SolveScratch::recycling`): the
+/// kept points at the bodies' poses and the contact `solve` holds the pair at
+/// (`solve::recycled_contact`). Only while the cache is last step's; false otherwise.
+fn judge_recycling(ctx: &mut StepContext) -> bool {
     let (step, b, meshes, params, dt) = (ctx.step, &ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
     let last_step = |s: &SolveScratch| s.step + 1 == step && !s.cache.is_empty();
     if !ctx.scratch.get::<SolveScratch>().is_some_and(last_step) {
-        return;
+        return false;
     }
     let mut cached = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().cached);
     let s = ctx.scratch.get_mut::<SolveScratch>();
@@ -333,19 +339,42 @@ fn skip_recycled(ctx: &mut StepContext) {
             s.recycling[entry as usize].step = Some(step);
         }
     }
-    let (cache, recycling) = (&s.cache, &mut s.recycling);
-    let rows = recycling.par_iter_mut().zip(cache.par_iter());
+    let rows = s.recycling.par_iter_mut().zip(s.cache.par_iter());
     rows.filter(|(r, _)| r.step == Some(step)).for_each(|(r, ((a, b_), entry))| {
         let (ia, ib) = (*a as usize, *b_ as usize);
         r.manifold = recycled_points(&entry.anchors, b, b.thinner(meshes, ia, ib), ia, ib);
+        r.contact = r.manifold.as_ref().and_then(|m| recycled_contact(m, &entry.anchors, b, ia, Feature::Face));
     });
-    for (pair, &entry) in ctx.pairs.iter_mut().zip(&cached).filter(|(p, e)| **e != u32::MAX && p.is_candidate()) {
-        let (kept, r) = (&cache[entry as usize].1, &s.recycling[entry as usize]);
-        // A pair no test found last time (held as near) is tested again, to see it touch.
-        if let (Some(feature), Some(m)) = (kept.found, &r.manifold)
-            && let Some(contact) = recycled_contact(m, &kept.anchors, b, pair.a as usize, feature)
-        {
-            pair.state = PairState::Found(contact);
+    ctx.scratch.get_mut::<PruneScratch>().cached = cached;
+    true
+}
+
+/// Takes the candidate pairs whose points `solve` will recycle (`judge_recycling`) out of the
+/// paper's tests: each is given the verdict the tests gave when they last ran on it and the
+/// recycled contact, which is all `solve` reads of them there (docs/physics.md §6.3). A pair no
+/// test found last time (held as near) is tested again, to see it touch. With `small_only`,
+/// the pairs of two small meshes, before their separation proofs: a pair that keeps its points
+/// is held or let go by `solve` from those points alone, so proving it apart would only drop
+/// it a step early. Without, the pairs with a many-faced body, after their GJK (whose records
+/// and retest turns stay as they were).
+fn take_recycled(ctx: &mut StepContext, small_only: bool) {
+    let (step, b, meshes) = (ctx.step, &ctx.bodies, &ctx.meshes);
+    let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
+    // The second call looks only at the pairs the first left alone.
+    let taken = |p: &Pair| p.is_candidate() && (many(p.a) || many(p.b)) != small_only;
+    if !small_only && !ctx.pairs.iter().any(taken) {
+        return;
+    }
+    let mut cached = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().cached);
+    let s = ctx.scratch.get_mut::<SolveScratch>();
+    // The first call comes straight after `judge_recycling`, on the same pairs.
+    if !small_only {
+        cache_entries(&s.cache, &ctx.pairs, &mut cached);
+    }
+    for (pair, &entry) in ctx.pairs.iter_mut().zip(&cached).filter(|(p, e)| **e != u32::MAX && taken(p)) {
+        let (kept, r) = (&s.cache[entry as usize].1, &s.recycling[entry as usize]);
+        if let (Some(feature), Some(contact), Some(_)) = (kept.found, r.contact, r.step.filter(|&t| t == step)) {
+            pair.state = PairState::Found(Contact { feature, ..contact });
         }
     }
     ctx.scratch.get_mut::<PruneScratch>().cached = cached;
@@ -365,7 +394,7 @@ struct PruneScratch {
     speculative: Vec<Scalar>,
     /// The pairs with a many-faced body not proved apart last step, sorted.
     touching: Vec<(u32, u32)>,
-    /// Scratch of `skip_recycled`: each pair's index in `solve`'s cache (`u32::MAX`: none).
+    /// Scratch of `take_recycled`: each pair's index in `solve`'s cache (`u32::MAX`: none).
     cached: Vec<u32>,
     /// Scratch: body i is a many-faced body of a candidate pair.
     wanted: Vec<bool>,

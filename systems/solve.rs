@@ -117,7 +117,11 @@ fn find_manifolds(ctx: &mut StepContext) {
         if let (Some(old), Some(kept)) = (old, kept) {
             (*recycled, *anchors, *m) = (true, *old, kept);
             let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
-            match recycled_contact(m, old, b, ia, feature) {
+            let contact = match verdict {
+                Some(v) => v.contact.map(|c| Contact { feature, ..c }),
+                None => recycled_contact(m, old, b, ia, feature),
+            };
+            match contact {
                 Some(c) if -c.depth <= reach(ia, ib, thin) => pair.state = PairState::Resolved(c),
                 _ => {
                     m.len = 0;

@@ -2,7 +2,7 @@
 //! warm-start cache (each pair's recycled points and impulses), the one part of it that lives
 //! from one step to the next (snapshots carry it).
 
-use crate::collision::contact::{Feature, Pair};
+use crate::collision::contact::{Contact, Feature, Pair};
 use crate::collision::manifold::{MAX_POINTS, Manifold};
 use crate::math::{Mat3, Quat, Scalar, Vector};
 use crate::solver::{Batch, PointRows, SolverBody};
@@ -92,6 +92,9 @@ pub struct Recycling {
     pub step: Option<u64>,
     /// The kept points placed at the bodies' poses then; `None` when the bodies moved too much.
     pub manifold: Option<Manifold>,
+    /// The contact the pair is held at then (`solve::recycled_contact`; its feature is not
+    /// meant, the pair's own is).
+    pub contact: Option<Contact>,
 }
 
 /// Each pair's index in `cache` (`u32::MAX` for none), into `out`: both lists are in pair
