@@ -44,11 +44,13 @@ fn edge_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) -> O
     if is_many_faced(a) {
         features_below(a, b, (Kind::Edges, &hints), flood);
     }
-    let edges: Box<dyn Iterator<Item = &[u32; 2]>> = if is_many_faced(a) {
-        Box::new(flood.features.iter().map(|&k| &a.mesh.edges[k as usize]))
-    } else {
-        Box::new(a.mesh.edges.iter())
+    // The flood's edges, or all of them: two plain iterators, not a boxed one (no allocation
+    // a call).
+    let (flooded, all) = match is_many_faced(a) {
+        true => (&flood.features[..], &[][..]),
+        false => (&[][..], &a.mesh.edges[..]),
     };
+    let edges = flooded.iter().map(|&k| &a.mesh.edges[k as usize]).chain(all);
     for &[i, j] in edges {
         let (v0, v1) = (a.vertices[i as usize], a.vertices[j as usize]);
         if !reach.meets_segment(v0, v1) || (many && beyond_near_face(b, &[v0, v1], eps, &mut hint)) {

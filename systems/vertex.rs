@@ -39,11 +39,13 @@ fn vertex_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) ->
     if is_many_faced(a) {
         features_below(a, b, (Kind::Vertices, &hints), flood);
     }
-    let candidates: Box<dyn Iterator<Item = &Vector>> = if is_many_faced(a) {
-        Box::new(flood.features.iter().map(|&i| &a.vertices[i as usize]))
-    } else {
-        Box::new(a.vertices.iter())
+    // The flood's vertices, or all of them: two plain iterators, not a boxed one (no
+    // allocation a call).
+    let (flooded, all) = match is_many_faced(a) {
+        true => (&flood.features[..], &[][..]),
+        false => (&[][..], &a.vertices[..]),
     };
+    let candidates = flooded.iter().map(|&i| &a.vertices[i as usize]).chain(all);
     let candidates = candidates.filter(|&&v| reach.contains(v));
     // On a many-faced body most candidates are outside: the point-in-mesh test leaves them at
     // the first plane they are beyond, and only the inside ones need the largest distance.

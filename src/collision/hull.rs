@@ -303,18 +303,15 @@ impl BitSet {
         self.words.resize(count.div_ceil(64), 0);
     }
 
+    /// Adds `items`, each below the count the set was `reset` for (mesh indices are).
     fn extend(&mut self, items: &[u32]) {
         for &i in items {
-            let (w, bit) = (i as usize / 64, i % 64);
-            if w >= self.words.len() {
-                self.words.resize(w + 1, 0);
-            }
-            self.words[w] |= 1 << bit;
+            self.words[i as usize / 64] |= 1 << (i % 64);
         }
     }
 
     fn contains(&self, i: u32) -> bool {
-        self.words.get(i as usize / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
+        self.words[i as usize / 64] & (1 << (i % 64)) != 0
     }
 
     fn sorted_into(&self, out: &mut Vec<u32>) {
