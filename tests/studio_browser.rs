@@ -6,7 +6,7 @@
 
 mod common;
 use common::studio::webdriver::{Browser, absolute};
-use common::studio::{PAGE_TEST_IDS, Studio, get, start};
+use common::studio::{PAGE_TEST_IDS, Studio, get, request, start};
 use serde_json::Value;
 use std::path::Path;
 
@@ -18,11 +18,26 @@ fn actors(studio: &Studio) -> Vec<Value> {
     state(studio)["actors"].as_array().expect("actors").clone()
 }
 
-/// A browser on the studio's page, loaded.
+/// A browser on the studio's page, loaded, drawn at every pixel (the adaptive render scale off,
+/// so that screenshots do not depend on how fast this machine draws).
 fn page(studio: &Studio) -> Browser {
+    page_with(studio, "adapt=0")
+}
+
+fn page_with(studio: &Studio, query: &str) -> Browser {
     let b = Browser::start(800, 600);
-    b.open(&format!("http://{}/", studio.addr));
+    b.open(&format!("http://{}/?{query}", studio.addr));
     b
+}
+
+/// The render scale the page shows (`data-scale` of the frame-rate corner).
+fn render_scale(b: &Browser) -> f64 {
+    b.attribute("fps", "data-scale").and_then(|s| s.parse().ok()).expect("data-scale")
+}
+
+/// The viewport canvas's drawing-buffer width and its width on screen [pixels].
+fn canvas_widths(b: &Browser) -> (f64, f64) {
+    (b.property("viewport", "width").as_f64().expect("width"), b.rect("viewport")[2])
 }
 
 /// Waits until the page's `actor-count` shows `n`.
@@ -265,7 +280,7 @@ fn joints_are_drawn_where_there_are_any() {
 
     // A scene without joints draws none and leaves the box unticked.
     let s = start("scenes/box-drop.ron");
-    b.open(&format!("http://{}/", s.addr));
+    b.open(&format!("http://{}/?adapt=0", s.addr));
     assert_eq!(b.text("joint-count"), "0");
     assert!(!b.is_selected("show-joints"));
 }
@@ -285,4 +300,42 @@ fn contacts_are_drawn_on_demand() {
         b.attribute("show-contacts", "data-drawn").and_then(|d| d.parse().ok()).filter(|&d| d >= 1)
     });
     assert!(drawn >= 1);
+}
+
+#[test]
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
+fn the_render_scale_adapts_shows_and_turns_off() {
+    // Aimed at 1 000 frames/s with the server 4 times faster than the page can draw, any machine
+    // is too slow: the scale steps down and says so.
+    let s = start("scenes/box-drop.ron");
+    request(&s, "POST", "/api/control", br#"{"action": "speed", "speed": 4}"#);
+    let b = page_with(&s, "fps=1000&play=1");
+    assert!(b.is_selected("adaptive-scale"));
+    // Read twice around the text, so that a step between the reads is not taken for a mismatch.
+    b.wait_for("a lower render scale, shown", || {
+        let (before, text, after) = (render_scale(&b), b.text("render-scale"), render_scale(&b));
+        (before == after && before <= 0.7 && text == format!("render scale {before}")).then_some(())
+    });
+    let (buffer, shown) = canvas_widths(&b);
+    assert!(buffer <= (shown * 0.85).ceil() && buffer >= (shown * 0.5).floor(), "canvas {buffer} wide shown {shown}");
+    b.click("adaptive-scale");
+    b.wait_for("every pixel drawn", || (render_scale(&b) == 1.0).then_some(()));
+    assert_eq!(b.text("render-scale"), "", "scale 1 is not shown");
+    let (buffer, shown) = canvas_widths(&b);
+    assert_eq!(buffer, shown.floor(), "canvas {buffer} wide shown {shown}");
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    assert_eq!(render_scale(&b), 1.0, "turned off, the scale stays at 1");
+
+    // Started at half the pixels and aimed at 2 frames/s, it goes back up to every pixel.
+    b.open(&format!("http://{}/?scale=0.5&fps=2", s.addr));
+    assert_eq!(render_scale(&b), 0.5);
+    assert_eq!(b.text("render-scale"), "render scale 0.5");
+    b.wait_for("every pixel again", || (render_scale(&b) == 1.0).then_some(()));
+    assert_eq!(b.text("render-scale"), "");
+
+    // ?adapt=0 keeps the scale asked for and the box unticked.
+    b.open(&format!("http://{}/?adapt=0&scale=0.6&fps=1000", s.addr));
+    assert!(!b.is_selected("adaptive-scale"));
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    assert_eq!(render_scale(&b), 0.6);
 }

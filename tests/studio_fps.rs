@@ -91,8 +91,12 @@ fn studio_at_4000_bodies() {
     let sps = get(&s, "/api/state?actors=0")["steps_per_second"].as_f64().unwrap_or(f64::NAN);
     println!("playing at 1x: {playing_ms:.3} ms a request, {sps:.1} steps/s (real time: 60)");
 
-    for (flag, label) in GL_PATHS {
-        let lines = page_fps(&format!("http://{}/?log=1", s.addr), 20, flag);
+    // Each way to SwiftShader with the adaptive render scale (the page's default), then the first
+    // once more with every pixel drawn (`?adapt=0`).
+    let runs =
+        GL_PATHS.iter().map(|&(flag, label)| (flag, label, "")).chain([(GL_PATHS[0].0, "use-gl, scale 1", "&adapt=0")]);
+    for (flag, label, query) in runs {
+        let lines = page_fps(&format!("http://{}/?log=1{query}", s.addr), 20, flag);
         for l in &lines {
             println!("  {label}: {l}");
         }
@@ -102,9 +106,13 @@ fn studio_at_4000_bodies() {
         assert!(!settled.is_empty(), "the page reported no frame rate with {flag}: {lines:?}");
         let drawn = median(settled.iter().map(|l| field(l, "drawn")).collect());
         let fetched = median(settled.iter().map(|l| field(l, "frames")).collect());
+        let scales: Vec<f64> = settled.iter().map(|l| field(l, "scale")).collect();
+        let last = scales.last().copied().unwrap_or(f64::NAN);
         println!(
-            "page, headless Chromium ({flag} --enable-unsafe-swiftshader, 1000x700), playing: median \
-             {drawn:.1} frames drawn/s, {fetched:.1} new states/s; server meanwhile {sps:.1} steps/s"
+            "page, headless Chromium ({flag}{query} --enable-unsafe-swiftshader, 1000x700), playing: median \
+             {drawn:.1} frames drawn/s, {fetched:.1} new states/s, render scale {:.2} (median; {last} at the end); \
+             server meanwhile {sps:.1} steps/s",
+            median(scales.clone())
         );
     }
 }

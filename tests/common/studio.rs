@@ -162,6 +162,8 @@ pub const PAGE_TEST_IDS: &[&str] = &[
     "show-joints",
     "joint-count",
     "show-contacts",
+    "adaptive-scale",
+    "render-scale",
 ];
 
 /// Headless Chromium drawing WebGL on the processor (SwiftShader; no GPU on CI).

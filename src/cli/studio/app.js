@@ -1,7 +1,8 @@
 // rigid studio: draws the running scene from /api/meshes (once per scene version) and
 // /api/frame (7 little-endian f32 per actor: position, quaternion x y z w), and drives the
 // JSON API (docs/studio.md). URL parameters: ?play=1 starts playing once loaded; ?log=1
-// writes the frame rates to the console each second (tests/studio_fps.rs reads them).
+// writes the frame rates to the console each second (tests/studio_fps.rs reads them);
+// ?adapt=0 turns the adaptive render scale off, ?scale=S starts it at S, ?fps=N aims it at N.
 
 import * as THREE from './three.module.min.js';
 import { OrbitControls } from './OrbitControls.js';
@@ -46,10 +47,55 @@ try {
   // A software renderer (SwiftShader, llvmpipe) pays for multisampling on the processor: there it
   // halves the frame rate of a 4 000-body scene (BENCH.md), so edges stay sharp-stepped instead.
   renderer = new THREE.WebGLRenderer({ canvas, antialias: !softwareRenderer(), preserveDrawingBuffer: true });
-  renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
 } catch (e) {
   showError(`WebGL is not available: ${e.message}`);
 }
+
+// The adaptive render scale: while the scene plays and the page draws fewer frames a second than
+// `target` although the server has newer states, the canvas is drawn at the next smaller share
+// of its pixels (the browser stretches it to the viewport); with half as many frames again to
+// spare it goes back up. A software renderer spends about half of a frame filling pixels
+// (BENCH.md, issue #21). Shown in the viewport's corner whenever below 1.
+const SCALES = [1, 0.85, 0.7, 0.6, 0.5];
+const adapt = {
+  on: params.get('adapt') !== '0',
+  target: Number(params.get('fps')) > 0 ? Number(params.get('fps')) : 30,
+  scale: 1,
+  // Seconds to leave out after a change: the second it happened in mixes both scales.
+  settle: 0,
+  step: null,
+};
+{
+  const s = Number(params.get('scale'));
+  if (s > 0 && s <= 1) adapt.scale = s;
+}
+
+function setScale(scale) {
+  adapt.scale = scale;
+  adapt.settle = 1;
+  if (!renderer) return;
+  renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2) * scale);
+  dirty = true;
+  showScale();
+}
+
+function showScale() {
+  const hud = $('hud');
+  hud.dataset.scale = String(adapt.scale);
+  $('hud-scale').textContent = adapt.scale < 1 ? `render scale ${adapt.scale}` : '';
+}
+
+// Once a second: `drawn` and `animation` frames in the second, the server's steps in it.
+function adaptScale(drawn, animation, steps, running) {
+  if (!adapt.on || !running || adapt.settle-- > 0) return;
+  const lower = SCALES.find((s) => s < adapt.scale - 1e-9);
+  const higher = SCALES.findLast((s) => s > adapt.scale + 1e-9);
+  // The page skips states: drawing (not the server) holds the rate.
+  const behind = steps > 1.2 * drawn;
+  if (behind && drawn < adapt.target && lower) setScale(lower);
+  else if (higher && (drawn >= 1.5 * adapt.target || (!behind && animation >= 1.5 * adapt.target))) setScale(higher);
+}
+
 const scene = new THREE.Scene();
 scene.background = new THREE.Color(0x2b3038);
 const camera = new THREE.PerspectiveCamera(45, 1, 0.05, 2000);
@@ -511,17 +557,21 @@ function countSecond() {
   if (now - fpsSince >= 1000) {
     const fps = (fpsFrames * 1000) / (now - fpsSince);
     const drawn = (drawnFrames * 1000) / (now - fpsSince);
-    $('hud').textContent = `${fps.toFixed(0)} frames/s (${drawn.toFixed(0)} drawn)`;
+    $('hud-rate').textContent = `${fps.toFixed(0)} frames/s (${drawn.toFixed(0)} drawn)`;
     $('hud').dataset.fps = fps.toFixed(1);
     $('hud').dataset.drawnFps = drawn.toFixed(1);
+    const step = Number($('time').dataset.step);
+    const steps = adapt.step === null ? 0 : ((step - adapt.step) * 1000) / (now - fpsSince);
+    adapt.step = step;
     if (params.get('log') === '1') {
       const per = (ms, n) => (ms / Math.max(n, 1)).toFixed(2);
       console.log(
         `studio-fps frames=${fps.toFixed(1)} drawn=${drawn.toFixed(1)} bodies=${groupOf.length} step=${$('time').dataset.step}` +
           ` animation=${spent.animation} request_ms=${per(spent.request, spent.requests)} place_ms=${per(spent.place, fpsFrames)}` +
-          ` render_ms=${per(spent.render, drawnFrames)} scale=${renderer ? renderer.getPixelRatio() : 0}`,
+          ` render_ms=${per(spent.render, drawnFrames)} scale=${adapt.scale} pixel_ratio=${renderer ? renderer.getPixelRatio() : 0}`,
       );
     }
+    adaptScale(drawn, (spent.animation * 1000) / (now - fpsSince), steps, running);
     fpsFrames = 0;
     drawnFrames = 0;
     for (const k of Object.keys(spent)) spent[k] = 0;
@@ -530,6 +580,7 @@ function countSecond() {
 }
 
 let frameInFlight = false;
+let running = false;
 let appliedKey = '';
 async function fetchFrame() {
   if (frameInFlight || loadingMeshes) return;
@@ -547,6 +598,7 @@ async function fetchFrame() {
       if (selected) select(selected).catch(() => {});
     }
     const step = r.headers.get('X-Step');
+    running = r.headers.get('X-Running') === 'true';
     // The same step of the same scene version: the same poses, nothing to draw again.
     const key = `${version}/${step}`;
     if (key === appliedKey && lastFrame) return;
@@ -577,7 +629,7 @@ async function fetchFrame() {
 function resize() {
   const w = canvas.clientWidth || 640;
   const h = canvas.clientHeight || 480;
-  if (renderer && (canvas.width !== Math.round(w * renderer.getPixelRatio()) || canvas.height !== Math.round(h * renderer.getPixelRatio()))) {
+  if (renderer && (canvas.width !== Math.floor(w * renderer.getPixelRatio()) || canvas.height !== Math.floor(h * renderer.getPixelRatio()))) {
     renderer.setSize(w, h, false);
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
@@ -711,6 +763,11 @@ $('show-joints').onchange = () => {
   if (lastFrame) placeJoints(lastFrame);
 };
 $('show-contacts').onchange = () => fetchContacts().catch(() => {});
+// Unticked: every pixel drawn (scale 1) and left there.
+$('adaptive-scale').onchange = (e) => {
+  adapt.on = e.target.checked;
+  if (!adapt.on) setScale(1);
+};
 $('speed').onchange = (e) => control({ action: 'speed', speed: Number(e.target.value) }).catch(() => {});
 
 async function loadSceneFile(file) {
@@ -909,6 +966,9 @@ function clickAt(fx, fy) {
 // ---- start ----------------------------------------------------------------------------------
 
 async function start() {
+  // The attribute too, so a dumped page shows it.
+  $('adaptive-scale').defaultChecked = $('adaptive-scale').checked = adapt.on;
+  setScale(adapt.scale);
   await pollState();
   await fetchFrame();
   requestAnimationFrame(animate);
