@@ -54,7 +54,7 @@ try {
 // The adaptive render scale: while the scene plays and the page draws fewer frames a second than
 // `target` although the server has newer states, the canvas is drawn at the next smaller share
 // of its pixels (the browser stretches it to the viewport); with half as many frames again to
-// spare it goes back up. A software renderer spends about half of a frame filling pixels
+// spare it goes back up. A software renderer spends about a third of a frame filling pixels
 // (BENCH.md, issue #21). Shown in the viewport's corner whenever below 1.
 const SCALES = [1, 0.85, 0.7, 0.6, 0.5];
 const adapt = {
