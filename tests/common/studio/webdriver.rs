@@ -45,40 +45,20 @@ fn free_port() -> u16 {
 
 impl Browser {
     /// Starts chromedriver and a headless Chromium window of `width` × `height` pixels.
+    /// A driver that resets the connection or fails to open a session is started afresh on a
+    /// new port, up to three times: on a loaded two-core machine a cold Chromium sometimes
+    /// dies starting, and one such start must not fail the suite.
     pub fn start(width: u32, height: u32) -> Browser {
         let turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-        let port = free_port();
-        let driver_bin = std::env::var("CHROMEDRIVER").unwrap_or_else(|_| "chromedriver".to_string());
-        let driver = Command::new(driver_bin)
-            .arg(format!("--port={port}"))
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("chromedriver runs (apt-get install chromium-driver)");
         let downloads = tempfile::tempdir().expect("temp dir");
-        let mut browser =
-            Browser { driver, addr: format!("127.0.0.1:{port}"), session: String::new(), downloads, _turn: turn };
-        let deadline = Instant::now() + Duration::from_secs(30);
-        while TcpStream::connect(&browser.addr).is_err() {
-            assert!(Instant::now() < deadline, "chromedriver does not listen on {}", browser.addr);
-            std::thread::sleep(Duration::from_millis(50));
+        let mut failures = Vec::new();
+        for _ in 0..3 {
+            match launch(width, height, downloads.path()) {
+                Ok((driver, addr, session)) => return Browser { driver, addr, session, downloads, _turn: turn },
+                Err(e) => failures.push(e),
+            }
         }
-        let mut args: Vec<String> = CHROMIUM_FLAGS.iter().map(|f| f.to_string()).collect();
-        args.push(format!("--window-size={width},{height}"));
-        let mut options = json!({
-            "args": args,
-            "prefs": {
-                "download.default_directory": browser.downloads.path().display().to_string(),
-                "download.prompt_for_download": false,
-            },
-        });
-        if let Ok(binary) = std::env::var("CHROMIUM") {
-            options["binary"] = json!(binary);
-        }
-        let caps = json!({"capabilities": {"alwaysMatch": {"browserName": "chrome", "goog:chromeOptions": options}}});
-        let reply = browser.call("POST", "/session", Some(caps));
-        browser.session = reply["sessionId"].as_str().expect("a session id").to_string();
-        browser
+        panic!("no browser session in three tries:\n{}", failures.join("\n"))
     }
 
     /// One command; returns its `value`, or the driver's error as `Err`.
@@ -202,6 +182,58 @@ impl Browser {
             }
             assert!(Instant::now() < deadline, "timed out waiting for {what}");
             std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+}
+
+/// One chromedriver on a fresh port and one session in it: the driver, its address and the
+/// session id, or what went wrong (the driver is then ended).
+fn launch(width: u32, height: u32, downloads: &Path) -> Result<(Child, String, String), String> {
+    let port = free_port();
+    let addr = format!("127.0.0.1:{port}");
+    let driver_bin = std::env::var("CHROMEDRIVER").unwrap_or_else(|_| "chromedriver".to_string());
+    let mut driver = Command::new(driver_bin)
+        .arg(format!("--port={port}"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("chromedriver runs (apt-get install chromium-driver)");
+    let mut args: Vec<String> = CHROMIUM_FLAGS.iter().map(|f| f.to_string()).collect();
+    args.push(format!("--window-size={width},{height}"));
+    let mut options = json!({
+        "args": args,
+        "prefs": {
+            "download.default_directory": downloads.display().to_string(),
+            "download.prompt_for_download": false,
+        },
+    });
+    if let Ok(binary) = std::env::var("CHROMIUM") {
+        options["binary"] = json!(binary);
+    }
+    let caps = json!({"capabilities": {"alwaysMatch": {"browserName": "chrome", "goog:chromeOptions": options}}});
+    let session = (|| {
+        let deadline = Instant::now() + Duration::from_secs(30);
+        while TcpStream::connect(&addr).is_err() {
+            if Instant::now() >= deadline {
+                return Err(format!("chromedriver does not listen on {addr}"));
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let body = caps.to_string();
+        let (status, reply) = try_http(&addr, "POST", "/session", body.as_bytes(), Duration::from_secs(60))
+            .map_err(|e| format!("POST http://{addr}/session: {e}"))?;
+        let reply: Value = serde_json::from_slice(&reply).map_err(|e| format!("POST /session: {e}"))?;
+        match reply["value"]["sessionId"].as_str() {
+            Some(id) if status == 200 => Ok(id.to_string()),
+            _ => Err(format!("POST /session: {status} {reply}")),
+        }
+    })();
+    match session {
+        Ok(id) => Ok((driver, addr, id)),
+        Err(e) => {
+            let _ = driver.kill();
+            let _ = driver.wait();
+            Err(e)
         }
     }
 }
