@@ -548,3 +548,16 @@ fn contacts_are_points_and_unit_normals() {
         assert!(c[1].abs() < 0.05, "the contact is on the floor's top: {c:?}");
     }
 }
+
+#[test]
+fn a_port_in_use_is_reported_as_such() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").expect("a free port");
+    let port = taken.local_addr().expect("address").port().to_string();
+    let out = Command::new(env!("CARGO_BIN_EXE_rigid"))
+        .args(["studio", "scenes/box-drop.ron", "--port", &port, "--no-open"])
+        .output()
+        .expect("rigid runs");
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains(&format!("cannot listen on 127.0.0.1:{port}")), "{stderr}");
+}
