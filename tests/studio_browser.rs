@@ -339,3 +339,52 @@ fn the_render_scale_adapts_shows_and_turns_off() {
     std::thread::sleep(std::time::Duration::from_secs(3));
     assert_eq!(render_scale(&b), 0.6);
 }
+
+#[test]
+#[ignore = "needs Chromium and chromedriver: .ci/run installs them and runs these"]
+fn small_boxes_drawn_as_points_look_as_their_triangles_do() {
+    // 4 006 boxes at half the pixels: a few pixels each, drawn as points (points.js); the same
+    // state drawn as triangles (`points=0`) must give the same picture but for edge pixels.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = dir.path().join("box-gas-4000.ron");
+    std::fs::write(&scene, "Scene(gravity: (0.0, 0.0, 0.0), actors: [], spawners: [BoxGas(actors: 4000, seed: 1)])")
+        .expect("write");
+    let s = start(&scene.display().to_string());
+    request(&s, "POST", "/api/control", br#"{"action": "step", "steps": 30}"#);
+    // Once the camera has come to rest (a second in which nothing was drawn), the picture and the
+    // count of points (once a second) stay as they are.
+    let shot = |query: &str| {
+        // Large enough that the boxes are some pixels across: at two or three pixels every pixel
+        // of a box is an edge pixel, and the stretched half-size picture blurs each over several.
+        let b = Browser::start(1000, 850);
+        b.open(&format!("http://{}/?{query}", s.addr));
+        wait_count(&b, 4006);
+        b.wait_for("the camera at rest", || (b.attribute("fps", "data-drawn-fps")? == "0.0").then_some(()));
+        let points = b.attribute("fps", "data-points").and_then(|p| p.parse::<u64>().ok()).expect("data-points");
+        (points, viewport_pixels(&b))
+    };
+    let (points, with_points) = shot("adapt=0&scale=0.5");
+    let (none, triangles) = shot("adapt=0&scale=0.5&points=0");
+    assert!(points >= 3000, "{points} of 4 000 boxes drawn as points");
+    assert_eq!(none, 0);
+    assert_eq!(with_points.len(), triangles.len());
+    // The bodies' pixels (saturated; the background, walls and grid are grey): points drawn too
+    // large or too small would change their count.
+    let coloured =
+        |px: &[[u8; 3]]| px.iter().filter(|p| p.iter().max().unwrap() - p.iter().min().unwrap() > 40).count();
+    let (a, b) = (coloured(&with_points), coloured(&triangles));
+    // Pixels that differ: along edges only (a box is a few pixels across, and the half-size
+    // picture is stretched over twice the pixels), not a face in the wrong colour or a box in
+    // front of the wrong one.
+    let differ = with_points.iter().zip(&triangles).filter(|(p, q)| p.iter().zip(*q).any(|(x, y)| x.abs_diff(*y) > 24));
+    let differ = differ.count();
+    // The mean colour: faces lit or chosen wrongly would move it.
+    let mean = |px: &[[u8; 3]], k: usize| px.iter().map(|p| f64::from(p[k])).sum::<f64>() / px.len() as f64;
+    println!("{points} points; {a} against {b} coloured pixels, {differ} differ");
+    assert!(b > 10_000 && a.abs_diff(b) * 100 < b, "{a} coloured pixels with points, {b} without");
+    assert!(differ * 4 < b, "{differ} pixels differ, of {b} coloured");
+    for k in 0..3 {
+        let (m, n) = (mean(&with_points, k), mean(&triangles, k));
+        assert!((m - n).abs() < 0.5, "channel {k}: mean {m} with points, {n} without");
+    }
+}

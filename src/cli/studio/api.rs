@@ -17,6 +17,7 @@ const PAGE: &str = include_str!("page.html");
 const APP: &str = include_str!("app.js");
 const THREE: &str = include_str!("three.module.min.js");
 const ORBIT: &str = include_str!("OrbitControls.js");
+const POINTS: &str = include_str!("points.js");
 
 /// A response: status, content type, body and extra headers.
 struct Reply {
@@ -50,6 +51,7 @@ pub(super) fn handle(mut request: Request, shared: &Shared) {
         (Method::Get, "/app.js") => Reply::text("text/javascript; charset=utf-8", APP),
         (Method::Get, "/three.module.min.js") => Reply::text("text/javascript; charset=utf-8", THREE),
         (Method::Get, "/OrbitControls.js") => Reply::text("text/javascript; charset=utf-8", ORBIT),
+        (Method::Get, "/points.js") => Reply::text("text/javascript; charset=utf-8", POINTS),
         (Method::Get, "/api/state") => Reply::json(200, &state(&lock(shared), !query.contains("actors=0"))),
         (Method::Get, "/api/frame") => frame(&lock(shared)),
         (Method::Get, "/api/contacts") => contacts(&lock(shared)),

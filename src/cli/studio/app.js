@@ -2,10 +2,12 @@
 // /api/frame (7 little-endian f32 per actor: position, quaternion x y z w), and drives the
 // JSON API (docs/studio.md). URL parameters: ?play=1 starts playing once loaded; ?log=1
 // writes the frame rates to the console each second (tests/studio_fps.rs reads them);
-// ?adapt=0 turns the adaptive render scale off, ?scale=S starts it at S, ?fps=N aims it at N.
+// ?adapt=0 turns the adaptive render scale off, ?scale=S starts it at S, ?fps=N aims it at N;
+// ?points=0 draws every box as triangles (points.js).
 
 import * as THREE from './three.module.min.js';
 import { OrbitControls } from './OrbitControls.js';
+import { POINT_MAX_PX, chooseDetail, pointBoxMaterial } from './points.js';
 
 const $ = (id) => document.getElementById(id);
 const params = new URLSearchParams(location.search);
@@ -46,7 +48,7 @@ let renderer = null;
 try {
   // A software renderer (SwiftShader, llvmpipe) pays for multisampling on the processor: there it
   // halves the frame rate of a 4 000-body scene (BENCH.md), so edges stay sharp-stepped instead.
-  renderer = new THREE.WebGLRenderer({ canvas, antialias: !softwareRenderer(), preserveDrawingBuffer: true });
+  renderer = new THREE.WebGLRenderer({ canvas, antialias: !softwareRenderer() });
 } catch (e) {
   showError(`WebGL is not available: ${e.message}`);
 }
@@ -229,10 +231,12 @@ function hexagonBoxGeometry([hx, hy, hz]) {
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.Float32BufferAttribute(corners.flatMap(([x, y, z]) => [x * hx, y * hy, z * hz]), 3));
   g.setAttribute('normal', new THREE.Float32BufferAttribute(normals.flat(), 3));
-  // Faces +y (1 2 3), +z (3 4 5), +x (5 6 1), each as two triangles from the near corner.
-  g.setIndex([0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5, 0, 5, 6, 0, 6, 1]);
+  g.setIndex(HEXAGON_TRIANGLES);
   return g;
 }
+
+// Faces +y (1 2 3), +z (3 4 5), +x (5 6 1), each as two triangles from the near corner.
+const HEXAGON_TRIANGLES = [0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5, 0, 5, 6, 0, 6, 1];
 
 // `count` copies of `geometry`, each vertex tagged with its copy's index, coloured per copy.
 function mergedGeometry(geometry, members, coloured) {
@@ -254,34 +258,98 @@ function mergedGeometry(geometry, members, coloured) {
   const body = new Float32Array(v * count);
   members.forEach((_, k) => body.fill(k, k * v, (k + 1) * v));
   g.setAttribute('body', new THREE.BufferAttribute(body, 1));
-  if (coloured) {
-    const color = new Float32Array(v * 3 * count);
-    const c = new THREE.Color();
-    members.forEach((a, k) => {
-      c.setRGB(a.colour[0] / 255, a.colour[1] / 255, a.colour[2] / 255, THREE.SRGBColorSpace);
-      for (let j = 0; j < v; j++) color.set([c.r, c.g, c.b], (k * v + j) * 3);
-    });
-    g.setAttribute('color', new THREE.BufferAttribute(color, 3));
-  }
+  if (coloured) g.setAttribute('color', new THREE.BufferAttribute(memberColours(members, v), 3));
   return g;
+}
+
+// Each member's colour, `v` times over.
+function memberColours(members, v) {
+  const color = new Float32Array(v * 3 * members.length);
+  const c = new THREE.Color();
+  members.forEach((a, k) => {
+    c.setRGB(a.colour[0] / 255, a.colour[1] / 255, a.colour[2] / 255, THREE.SRGBColorSpace);
+    for (let j = 0; j < v; j++) color.set([c.r, c.g, c.b], (k * v + j) * 3);
+  });
+  return color;
+}
+
+// The members as points (points.js), each vertex one member; which are drawn, and in what order,
+// is the index `chooseDetail` fills each frame.
+function pointsOf(g, box) {
+  const n = g.members.length;
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
+  geometry.setAttribute('body', new THREE.BufferAttribute(Float32Array.from(g.members, (_, k) => k), 1));
+  geometry.setAttribute('color', new THREE.BufferAttribute(memberColours(g.members, 1), 3));
+  geometry.setIndex(new THREE.BufferAttribute(new (n > 65535 ? Uint32Array : Uint16Array)(n), 1).setUsage(THREE.DynamicDrawUsage));
+  geometry.setDrawRange(0, 0);
+  const uniforms = { ...lightUniforms(), projection: { value: camera.projectionMatrix }, viewport: { value: drawingViewport } };
+  const points = new THREE.Points(geometry, pointBoxMaterial(g.poses, box, POSE_WIDTH, uniforms));
+  points.frustumCulled = false;
+  g.radius = Math.hypot(...box);
+  g.hexPattern = HEXAGON_TRIANGLES;
+  g.hexIndex = g.draw.geometry.getIndex().array;
+  g.draw.geometry.getIndex().setUsage(THREE.DynamicDrawUsage);
+  g.pointIndex = geometry.getIndex().array;
+  g.points = 0;
+  g.hexes = n;
+  return points;
+}
+
+// The drawing buffer's viewport [pixels], for the points' shader.
+const drawingViewport = new THREE.Vector4();
+
+// Points where the renderer can draw them as large as a point may be.
+function pointsAllowed() {
+  if (!renderer || params.get('points') === '0') return false;
+  const range = renderer.getContext().getParameter(renderer.getContext().ALIASED_POINT_SIZE_RANGE);
+  return range && range[1] >= POINT_MAX_PX;
+}
+
+// Before drawing: which boxes are points this frame, and the draw ranges that follow.
+function placeDetail() {
+  renderer.getDrawingBufferSize(bufferSize);
+  drawingViewport.set(0, 0, bufferSize.x, bufferSize.y);
+  camera.updateMatrixWorld();
+  for (const g of groups) {
+    if (!g.dots) continue;
+    if (chooseDetail(g, camera, bufferSize.x, bufferSize.y)) {
+      g.draw.geometry.getIndex().needsUpdate = true;
+      g.dots.geometry.getIndex().needsUpdate = true;
+    }
+    g.draw.geometry.setDrawRange(0, 18 * g.hexes);
+    g.dots.geometry.setDrawRange(0, g.points);
+  }
+}
+const bufferSize = new THREE.Vector2();
+
+// Boxes the last frame drew as points.
+function pointsDrawn() {
+  return groups.reduce((n, g) => n + (g.dots ? g.points : 0), 0);
 }
 
 // Lambert light (three.js's formula for these two lights) worked out per vertex, each vertex
 // placed by its member's pose (two texels: position, then the quaternion x y z w). The faces are
 // flat (a vertex carries its face's normal) and a hemisphere and a sun light by the normal only,
 // so this draws what MeshLambertMaterial draws, in a shader short enough to hold `FACING`.
-function posedMaterial({ color, opacity = 1, vertexColors = false, facing = false, hexagon = false }, poses) {
+function lightUniforms() {
   const scaled = (c, k) => c.clone().multiplyScalar(k);
+  return {
+    sky: { value: scaled(hemi.color, hemi.intensity) },
+    ground: { value: scaled(hemi.groundColor, hemi.intensity) },
+    up: { value: hemi.position.clone().normalize() },
+    sunColor: { value: scaled(sun.color, sun.intensity) },
+    sunDir: { value: sun.position.clone().sub(sun.target.position).normalize() },
+  };
+}
+
+function posedMaterial({ color, opacity = 1, vertexColors = false, facing = false, hexagon = false }, poses) {
   return new THREE.ShaderMaterial({
     uniforms: {
       poses: { value: poses },
       tint: { value: new THREE.Color(color) },
       opacity: { value: opacity },
-      sky: { value: scaled(hemi.color, hemi.intensity) },
-      ground: { value: scaled(hemi.groundColor, hemi.intensity) },
-      up: { value: hemi.position.clone().normalize() },
-      sunColor: { value: scaled(sun.color, sun.intensity) },
-      sunDir: { value: sun.position.clone().sub(sun.target.position).normalize() },
+      ...lightUniforms(),
     },
     defines: hexagon ? { HEXAGON: '' } : facing ? { FACING: '' } : {},
     // Mirrored into an octant with one or three axes flipped, a hexagon is wound the other way;
@@ -352,6 +420,11 @@ async function loadMeshes() {
       scene.remove(g.draw);
       g.draw.geometry.dispose();
       g.draw.material.dispose();
+      if (g.dots) {
+        scene.remove(g.dots);
+        g.dots.geometry.dispose();
+        g.dots.material.dispose();
+      }
       g.poses.dispose();
       g.object.dispose();
     }
@@ -381,6 +454,10 @@ async function loadMeshes() {
       g.draw = new THREE.Mesh(mergedGeometry(drawn, g.members, !g.fixed), material);
       g.draw.frustumCulled = false;
       scene.add(g.draw);
+      if (hexagon && pointsAllowed()) {
+        g.dots = pointsOf(g, box);
+        scene.add(g.dots);
+      }
       g.object = new THREE.InstancedMesh(geometries[g.mesh], material, g.members.length);
       g.object.frustumCulled = false;
     }
@@ -560,6 +637,7 @@ function countSecond() {
     $('hud-rate').textContent = `${fps.toFixed(0)} frames/s (${drawn.toFixed(0)} drawn)`;
     $('hud').dataset.fps = fps.toFixed(1);
     $('hud').dataset.drawnFps = drawn.toFixed(1);
+    $('hud').dataset.points = String(pointsDrawn());
     const step = Number($('time').dataset.step);
     const steps = adapt.step === null ? 0 : ((step - adapt.step) * 1000) / (now - fpsSince);
     adapt.step = step;
@@ -568,7 +646,8 @@ function countSecond() {
       console.log(
         `studio-fps frames=${fps.toFixed(1)} drawn=${drawn.toFixed(1)} bodies=${groupOf.length} step=${$('time').dataset.step}` +
           ` animation=${spent.animation} request_ms=${per(spent.request, spent.requests)} place_ms=${per(spent.place, fpsFrames)}` +
-          ` render_ms=${per(spent.render, drawnFrames)} scale=${adapt.scale} pixel_ratio=${renderer ? renderer.getPixelRatio() : 0}`,
+          ` render_ms=${per(spent.render, drawnFrames)} scale=${adapt.scale} pixel_ratio=${renderer ? renderer.getPixelRatio() : 0}` +
+          ` points=${pointsDrawn()}`,
       );
     }
     adaptScale(drawn, (spent.animation * 1000) / (now - fpsSince), steps, running);
@@ -585,6 +664,7 @@ let appliedKey = '';
 async function fetchFrame() {
   if (frameInFlight || loadingMeshes) return;
   frameInFlight = true;
+  let fresh = false;
   try {
     const asked = performance.now();
     const r = await fetch('/api/frame');
@@ -603,6 +683,7 @@ async function fetchFrame() {
     const key = `${version}/${step}`;
     if (key === appliedKey && lastFrame) return;
     appliedKey = key;
+    fresh = true;
     const f = new Float32Array(buf);
     lastFrame = f;
     const placing = performance.now();
@@ -624,6 +705,8 @@ async function fetchFrame() {
   } finally {
     frameInFlight = false;
   }
+  // While the scene plays, ask again at once rather than at the next animation frame.
+  if (fresh && running) fetchFrame();
 }
 
 function resize() {
@@ -644,6 +727,7 @@ function animate() {
   controls?.update();
   if (renderer && dirty) {
     const rendering = performance.now();
+    placeDetail();
     renderer.render(scene, camera);
     spent.render += performance.now() - rendering;
     dirty = false;
