@@ -98,10 +98,10 @@ export function pointBoxMaterial(poses, extent, poseWidth, uniforms) {
     vertexShader: `attribute float body;
 uniform highp sampler2D poses;
 uniform vec3 sky, ground, up, sunColor, sunDir;
+uniform vec3 extent;
 uniform float radius;
 uniform vec4 viewport;
-flat varying vec3 vCentre;
-flat varying mat3 vToBox;
+flat varying vec3 vLow, vHigh, vRayX, vRayY, vRay0;
 flat varying vec3 vLitX, vLitY, vLitZ;
 vec3 turn(vec4 q, vec3 v) { return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v); }
 vec4 poseTexel(int i) { return texelFetch(poses, ivec2(i % ${poseWidth}, i / ${poseWidth}), 0); }
@@ -120,27 +120,30 @@ void main() {
   vLitY = light(q, vec3(0.0, eye.y < 0.0 ? -1.0 : 1.0, 0.0));
   vLitZ = light(q, vec3(0.0, 0.0, eye.z < 0.0 ? -1.0 : 1.0));
   vec4 centre = modelViewMatrix * vec4(at.xyz, 1.0);
-  vCentre = centre.xyz;
   mat3 boxToWorld = mat3(turn(q, vec3(1.0, 0.0, 0.0)), turn(q, vec3(0.0, 1.0, 0.0)), turn(q, vec3(0.0, 0.0, 1.0)));
-  vToBox = transpose(mat3(viewMatrix) * boxToWorld);
+  mat3 toBox = transpose(mat3(viewMatrix) * boxToWorld);
+  // The box's faces from the eye in the box's frame, and the eye's ray through a pixel there,
+  // linear in the pixel's coordinates: in view space (ndc.x + P[2][0]) / P[0][0],
+  // (ndc.y + P[2][1]) / P[1][1], -1.
+  vec3 origin = toBox * -centre.xyz;
+  vLow = -extent - origin;
+  vHigh = extent - origin;
+  vRayX = toBox[0] * (2.0 / (viewport.z * projectionMatrix[0][0]));
+  vRayY = toBox[1] * (2.0 / (viewport.w * projectionMatrix[1][1]));
+  vRay0 = toBox * vec3((projectionMatrix[2][0] - 1.0 - 2.0 * viewport.x / viewport.z) / projectionMatrix[0][0],
+                       (projectionMatrix[2][1] - 1.0 - 2.0 * viewport.y / viewport.w) / projectionMatrix[1][1], -1.0);
   gl_PointSize = 2.0 * halfSide(centre.xyz, radius, 0.5 * viewport.w * projectionMatrix[1][1]) + 2.0;
   gl_Position = projectionMatrix * centre;
 }`,
-    fragmentShader: `uniform vec3 extent;
-uniform vec4 viewport;
-uniform mat4 projection;
-flat varying vec3 vCentre;
-flat varying mat3 vToBox;
+    fragmentShader: `uniform mat4 projection;
+flat varying vec3 vLow, vHigh, vRayX, vRayY, vRay0;
 flat varying vec3 vLitX, vLitY, vLitZ;
 void main() {
-  // The eye's ray through this pixel in view space (from the origin, one unit along -z per
-  // unit of t), then in the box's frame; the slabs give where it enters and leaves the box.
-  vec2 ndc = 2.0 * (gl_FragCoord.xy - viewport.xy) / viewport.zw - 1.0;
-  vec3 ray = vec3((ndc.x + projection[2][0]) / projection[0][0], (ndc.y + projection[2][1]) / projection[1][1], -1.0);
-  vec3 origin = vToBox * -vCentre;
-  vec3 inverse = 1.0 / (vToBox * ray);
-  vec3 t0 = (-extent - origin) * inverse;
-  vec3 t1 = (extent - origin) * inverse;
+  // The eye's ray through this pixel in the box's frame (one unit along the view's -z per unit
+  // of t); the slabs give where it enters and leaves the box.
+  vec3 inverse = 1.0 / (vRayX * gl_FragCoord.x + vRayY * gl_FragCoord.y + vRay0);
+  vec3 t0 = vLow * inverse;
+  vec3 t1 = vHigh * inverse;
   vec3 near = min(t0, t1);
   vec3 far = max(t0, t1);
   float enter = max(max(near.x, near.y), near.z);
