@@ -9,7 +9,7 @@
 import * as THREE from './three.module.min.js';
 
 // Largest point [drawing-buffer pixels]: beyond it the hexagon is cheaper.
-export const POINT_MAX_PX = 12;
+export const POINT_MAX_PX = 16;
 
 // The eye's angle to a sphere's centre, and the sphere's angular radius, beyond which its
 // projection is too stretched to bound well (the box is drawn as a hexagon).
