@@ -328,10 +328,8 @@ function pointsDrawn() {
   return groups.reduce((n, g) => n + (g.dots ? g.points : 0), 0);
 }
 
-// Lambert light (three.js's formula for these two lights) worked out per vertex, each vertex
-// placed by its member's pose (two texels: position, then the quaternion x y z w). The faces are
-// flat (a vertex carries its face's normal) and a hemisphere and a sun light by the normal only,
-// so this draws what MeshLambertMaterial draws, in a shader short enough to hold `FACING`.
+// The page's hemisphere and sun as the posed shaders' uniforms (the points' shader lights as the
+// hexagons' does).
 function lightUniforms() {
   const scaled = (c, k) => c.clone().multiplyScalar(k);
   return {
@@ -343,6 +341,10 @@ function lightUniforms() {
   };
 }
 
+// Lambert light (three.js's formula for these two lights) worked out per vertex, each vertex
+// placed by its member's pose (two texels: position, then the quaternion x y z w). The faces are
+// flat (a vertex carries its face's normal) and a hemisphere and a sun light by the normal only,
+// so this draws what MeshLambertMaterial draws, in a shader short enough to hold `FACING`.
 function posedMaterial({ color, opacity = 1, vertexColors = false, facing = false, hexagon = false }, poses) {
   return new THREE.ShaderMaterial({
     uniforms: {
