@@ -348,4 +348,3 @@ pub(super) fn tangents(n: Vector) -> [Vector; 2] {
     let t1 = n.cross(helper).normalize();
     [t1, n.cross(t1)]
 }
-
