@@ -2,7 +2,10 @@
 //! bodies (with the split in two sides), batches of independent constraints, and each held
 //! pair's rows with the impulses of last step's matching points.
 
-use super::{Batch, Constraint, ContactPoint, Friction, LANES, PointRows, SolverBody};
+use super::fill::LaneInputs;
+use super::{Batch, LANES, PointRows, SolverBody};
+#[cfg(test)]
+use super::{Constraint, ContactPoint};
 use crate::collision::contact::Pair;
 use crate::collision::manifold::Manifold;
 use crate::math::{Mat3, Scalar, Vector, total_order_key};
@@ -106,9 +109,8 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
 const ACROSS: u8 = 2;
 
 /// Places group `which`'s constraints in batches (`solver::place`), each batch as long as its
-/// longest manifold, and makes room for their points. The lanes and points `fill` writes whole
-/// are left as they are (last step's, in reused memory); only the others are made idle here.
-/// Clearing every batch and point afresh wrote the whole solver state twice a step.
+/// longest manifold, and makes room for their points. `fill` writes every lane and point of
+/// them, idle ones included, so nothing is cleared here.
 pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
     if which == ACROSS {
         // One chain up the cut: packed, not one constraint a batch (`place_packed`).
@@ -116,17 +118,13 @@ pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGr
     } else {
         super::place(&group.slots, group.static_slot, &mut group.last, &mut group.fill, &mut group.placed);
     }
-    let ConstraintGroup { batches, points, fill, placed, static_slot, .. } = group;
+    let ConstraintGroup { batches, points, fill, placed, .. } = group;
     batches.resize(fill.len(), Batch::default());
-    let idle = Constraint::idle(*static_slot);
-    for (batch, &count) in batches.iter_mut().zip(fill.iter()) {
+    for batch in batches.iter_mut() {
         batch.len = 0;
-        for l in usize::from(count)..LANES {
-            batch.set(l, &idle);
-        }
     }
-    let mine = || held.iter().filter(|h| h.group == which).zip(placed.iter());
-    for (held, &(batch, _)) in mine() {
+    let mine = held.iter().filter(|h| h.group == which).zip(placed.iter());
+    for (held, &(batch, _)) in mine {
         let batch = &mut batches[batch as usize];
         batch.len = batch.len.max(u32::from(held.len));
     }
@@ -136,15 +134,26 @@ pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGr
         first += batch.len;
     }
     points.resize(first as usize, PointRows::default());
-    // Idle points: every point of an idle lane, and a lane's beyond its own manifold's.
-    for (batch, &count) in batches.iter().zip(fill.iter()) {
+}
+
+/// Makes a placed group's lanes and points idle: every unused lane, and a lane's points beyond
+/// its own manifold's (`held`, as for `place_group`). For tests that write the lanes one by one
+/// (`Batch::set`, `PointRows::set`) instead of `fill`.
+#[cfg(test)]
+pub(super) fn make_idle(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
+    let ConstraintGroup { batches, points, fill, placed, static_slot, .. } = group;
+    let idle = Constraint::idle(*static_slot);
+    for (batch, &count) in batches.iter_mut().zip(fill.iter()) {
+        for l in usize::from(count)..LANES {
+            batch.set(l, &idle);
+        }
         for row in &mut points[batch.first as usize..(batch.first + batch.len) as usize] {
             for l in usize::from(count)..LANES {
                 row.set(l, &ContactPoint::IDLE);
             }
         }
     }
-    for (held, &(batch, lane)) in mine() {
+    for (held, &(batch, lane)) in held.iter().filter(|h| h.group == which).zip(placed.iter()) {
         let batch = &batches[batch as usize];
         for row in &mut points[(batch.first + u32::from(held.len)) as usize..(batch.first + batch.len) as usize] {
             row.set(usize::from(lane), &ContactPoint::IDLE);
@@ -170,137 +179,81 @@ struct Shared<'a> {
 }
 
 /// Writes the constraints and points of group `which`'s held pairs into its batches (their
-/// slots in the group's numbering are `group.slots`, in the same order).
+/// slots in the group's numbering are `group.slots`, in the same order): each batch's lanes
+/// gathered here, then worked out four at a time (`fill::fill_lanes`), which also writes the
+/// idle lanes and points.
 fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     let (b, params, dt) = (sh.bodies, sh.params, sh.dt);
-    let ConstraintGroup { slots, placed, batches, points, .. } = group;
+    let ConstraintGroup { slots, placed, batches, points, fill: counts, static_slot, lanes, .. } = group;
+    // Each batch's lanes: (pair, index in the group).
+    lanes.clear();
+    lanes.resize(batches.len(), [(0, 0); LANES]);
+    let mine = sh.held.iter().filter(|h| h.group == which);
+    for (c, (held, &(batch, lane))) in mine.zip(placed.iter()).enumerate() {
+        lanes[batch as usize][usize::from(lane)] = (held.pair, c as u32);
+    }
     // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
     // before integrating forces).
     let before = |i: usize| b.velocity[i] - if b.is_fixed(i) { Vector::ZERO } else { params.gravity * dt };
     let compliance = super::Softness::new(params.substep(dt)).compliance;
-    let mine = sh.held.iter().filter(|h| h.group == which);
-    for ((held, &slot), &(batch, lane)) in mine.zip(slots.iter()).zip(placed.iter()) {
-        let k = held.pair;
-        let (pair, m) = (&sh.pairs[k as usize], &sh.manifolds[k as usize]);
-        let contact = pair.contact().expect("ordered pairs have contacts");
-        let (ia, ib) = (pair.a as usize, pair.b as usize);
-        let n = contact.normal;
-        let tangents = tangents(n);
-        let thin = b.thinner(sh.meshes, ia, ib);
-        let scale = [sh.scale[sh.slot[ia] as usize], sh.scale[sh.slot[ib] as usize]];
-        let inv_mass = [b.inv_mass[ia], b.inv_mass[ib]];
-        let cached = (sh.cached[k as usize] != u32::MAX).then(|| &sh.cache[sh.cached[k as usize] as usize].1);
-        let mu = b.pair_friction(ia, ib);
-        let (anchors, recycled) = (&sh.anchors[k as usize], sh.recycled[k as usize]);
-        let into = &mut batches[batch as usize];
-        let first = into.first as usize;
-        // The friction patch's centre: the mean of the points.
-        let centre = m.points().iter().sum::<Vector>() / m.len as Scalar;
-        let mut rows = [ContactPoint::IDLE; crate::collision::manifold::MAX_POINTS];
-        let (before_a, before_b) = (before(ia), before(ib));
-        for (j, (&p, &gap)) in m.points().iter().zip(&m.gaps).enumerate() {
-            let r = [p - b.position[ia], p - b.position[ib]];
-            let g = [scale[0] * r[0].cross(n), scale[1] * r[1].cross(n)];
-            // Needed only by a new point (below): a recycled manifold's points never bounce.
-            let approach = || {
-                (before_a + b.angular_velocity[ia].cross(r[0]) - before_b - b.angular_velocity[ib].cross(r[1])).dot(n)
-            };
-            // A recycled point is last step's own; a new one takes the impulse of the old
-            // point at the same place on A, if any.
-            let old = cached.and_then(|c| {
-                let near = |q: usize| (c.anchors.on_a[q] - anchors.on_a[j]).length() <= MATCH_DISTANCE * b.radius[ia];
-                if recycled { Some(j) } else { (0..c.anchors.len).find(|&q| near(q)) }.map(|q| c.normal[q])
-            });
-            let k = inv_mass[0] + inv_mass[1] + g[0].length_squared() + g[1].length_squared();
-            rows[j] = ContactPoint {
-                g,
-                mass: inverse(k),
-                k,
-                impulse: old.unwrap_or(0.0),
-                gap,
-                // Only a new point bounces (rapier's rule): one held since last step is resting
-                // or rocking on it, and bouncing there keeps a settling pile astir.
-                approach: if old.is_some() { 0.0 } else { approach() },
-                max_impulse: 0.0,
-                lever: (p - centre).length(),
-                coupling: 0.0,
-                inv_det: [0.0; 2],
-            };
-        }
-        couple_pairs(&mut rows[..m.len], inv_mass, compliance);
-        for (j, row) in rows[..m.len].iter().enumerate() {
-            points[first + j].set(lane as usize, row);
-        }
-        into.set(
-            lane as usize,
-            &Constraint {
-                slot,
-                normal: n,
-                tangents,
-                inv_mass,
-                mu,
-                restitution: 0.5 * (b.restitution[ia] + b.restitution[ib]),
-                slop: params.slop * thin,
-                max_push: (params.max_correction * thin / dt).min(MAX_PUSH),
-                friction: if mu > 0.0 {
-                    friction_patch(centre, [b.position[ia], b.position[ib]], n, tangents, inv_mass, scale, cached)
+    let mut input = LaneInputs::default();
+    for ((batch, &count), lanes) in batches.iter_mut().zip(counts.iter()).zip(lanes.iter()) {
+        let count = usize::from(count);
+        let rows = &mut points[batch.first as usize..(batch.first + batch.len) as usize];
+        // An idle lane repeats lane 0 (`LaneInputs`).
+        for l in 0..LANES {
+            let (k, c) = lanes[if l < count { l } else { 0 }];
+            let (pair, m) = (&sh.pairs[k as usize], &sh.manifolds[k as usize]);
+            let contact = pair.contact().expect("ordered pairs have contacts");
+            let (ia, ib) = (pair.a as usize, pair.b as usize);
+            let n = contact.normal;
+            (input.slot[0][l], input.slot[1][l]) = (slots[c as usize][0], slots[c as usize][1]);
+            input.normal.set(l, n);
+            for (end, i) in [ia, ib].into_iter().enumerate() {
+                input.position[end].set(l, b.position[i]);
+                input.before[end].set(l, before(i));
+                input.spin[end].set(l, b.angular_velocity[i]);
+                let s = &sh.scale[sh.slot[i] as usize];
+                input.scale[end][0].set(l, s.x_axis);
+                input.scale[end][1].set(l, s.y_axis);
+                input.scale[end][2].set(l, s.z_axis);
+                input.inv_mass[end][l] = b.inv_mass[i];
+            }
+            let thin = b.thinner(sh.meshes, ia, ib);
+            input.mu[l] = b.pair_friction(ia, ib);
+            input.restitution[l] = 0.5 * (b.restitution[ia] + b.restitution[ib]);
+            input.slop[l] = params.slop * thin;
+            input.max_push[l] = (params.max_correction * thin / dt).min(MAX_PUSH);
+            input.len[l] = m.len as Scalar;
+            let cached = (sh.cached[k as usize] != u32::MAX).then(|| &sh.cache[sh.cached[k as usize] as usize].1);
+            let (anchors, recycled) = (&sh.anchors[k as usize], sh.recycled[k as usize]);
+            for j in 0..rows.len() {
+                // Past the lane's own points: its first again, taking an impulse (so no bounce).
+                let own = j < m.len;
+                let at = if own { j } else { 0 };
+                input.points[j].set(l, m.points[at]);
+                input.gap[j][l] = m.gaps[at];
+                // A recycled point is last step's own; a new one takes the impulse of the old
+                // point at the same place on A, if any. Only a new point bounces (rapier's
+                // rule): one held since last step is resting or rocking on it, and bouncing
+                // there keeps a settling pile astir.
+                let old = if own {
+                    cached.and_then(|c| {
+                        let near =
+                            |q: usize| (c.anchors.on_a[q] - anchors.on_a[j]).length() <= MATCH_DISTANCE * b.radius[ia];
+                        if recycled { Some(j) } else { (0..c.anchors.len).find(|&q| near(q)) }.map(|q| c.normal[q])
+                    })
                 } else {
-                    Friction::IDLE
-                },
-            },
-        );
-    }
-}
-
-/// Each pair of points' coupling and inverse determinants (`solver::ContactPoint::coupling`,
-/// `inv_det`), for the points `rows` of one manifold with inverse masses `inv_mass`, and the soft
-/// rows' `Softness::compliance`.
-pub(super) fn couple_pairs(rows: &mut [ContactPoint], inv_mass: [Scalar; 2], compliance: Scalar) {
-    for j in (0..rows.len().saturating_sub(1)).step_by(2) {
-        let (p, q) = (&rows[j], &rows[j + 1]);
-        let coupling = inv_mass[0] + inv_mass[1] + p.g[0].dot(q.g[0]) + p.g[1].dot(q.g[1]);
-        // Once a step here, not in every sweep: the kernel's division is its slowest step.
-        // The same arithmetic as the kernel's (a rigid row's compliance term is zero).
-        let soft = |k: Scalar| k + compliance * k;
-        let det = [p.k * q.k - coupling * coupling, soft(p.k) * soft(q.k) - coupling * coupling];
-        rows[j].inv_det = det.map(|d| 1.0 / d);
-        rows[j].coupling = coupling;
-    }
-}
-
-/// 1/k, or 0 for k = 0 (a row between two fixed bodies, or an idle one).
-fn inverse(k: Scalar) -> Scalar {
-    if k > 0.0 { 1.0 / k } else { 0.0 }
-}
-
-/// The friction rows of a pair at its patch `centre` (see `solver::Friction`), warm-started
-/// from last step's patch impulses.
-pub(super) fn friction_patch(
-    centre: Vector,
-    position: [Vector; 2],
-    n: Vector,
-    tangents: [Vector; 2],
-    inv_mass: [Scalar; 2],
-    scale: [Mat3; 2],
-    cached: Option<&CachedManifold>,
-) -> Friction {
-    let r = [centre - position[0], centre - position[1]];
-    let g = tangents.map(|t| [scale[0] * r[0].cross(t), scale[1] * r[1].cross(t)]);
-    // K = J M⁻¹ Jᵀ over the two tangent rows (their linear parts are orthogonal).
-    let linear = inv_mass[0] + inv_mass[1];
-    let k11 = linear + g[0][0].length_squared() + g[0][1].length_squared();
-    let k22 = linear + g[1][0].length_squared() + g[1][1].length_squared();
-    let k12 = g[0][0].dot(g[1][0]) + g[0][1].dot(g[1][1]);
-    let det = k11 * k22 - k12 * k12;
-    let mass = if det > 0.0 { [k22 / det, -k12 / det, k11 / det] } else { [inverse(k11), 0.0, inverse(k22)] };
-    let twist = [scale[0] * n, scale[1] * n];
-    let (jt, jw) = cached.map_or((Vector::ZERO, Vector::ZERO), |c| (c.tangent, c.twist));
-    Friction {
-        g,
-        twist,
-        mass,
-        twist_mass: inverse(twist[0].length_squared() + twist[1].length_squared()),
-        impulse: [jt.dot(tangents[0]), jt.dot(tangents[1]), jw.dot(n)],
+                    Some(0.0)
+                };
+                input.impulse[j][l] = old.unwrap_or(0.0);
+                input.kept[j][l] = if old.is_some() { 1.0 } else { 0.0 };
+            }
+            let (jt, jw) = cached.map_or((Vector::ZERO, Vector::ZERO), |c| (c.tangent, c.twist));
+            input.tangent_impulse.set(l, jt);
+            input.twist_impulse.set(l, jw);
+        }
+        super::fill::fill_lanes(&input, count, *static_slot, compliance, batch, rows);
     }
 }
 

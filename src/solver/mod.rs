@@ -30,6 +30,7 @@ use crate::math::{Scalar, Vector};
 mod anchored;
 mod constraints;
 mod drive;
+mod fill;
 mod joint_pass;
 mod joint_system;
 mod joints;

@@ -24,6 +24,8 @@ pub struct ConstraintGroup {
     pub fill: Vec<u8>,
     /// Scratch of `solver::place`.
     pub last: Vec<u32>,
+    /// Scratch of `fill`: each batch's lanes as (pair, index in `slots`).
+    pub lanes: Vec<[(u32, u32); crate::solver::LANES]>,
     /// The batches of independent constraints, in solving order.
     pub batches: Vec<Batch>,
     /// Their points, lane by lane.

@@ -338,4 +338,6 @@ pub(super) fn restitution(bodies: &mut [SolverBody], pairs: &mut [PairRows], thr
 }
 
 #[cfg(test)]
+pub(super) mod fill;
+#[cfg(test)]
 mod tests;

@@ -2,7 +2,8 @@
 
 use super::PairRows;
 use crate::math::{Mat3, Quat, Scalar, Vector};
-use crate::solver::constraints::{couple_pairs, friction_patch, place_group, tangents};
+use crate::solver::constraints::{make_idle, place_group, tangents};
+use crate::solver::reference::fill::{couple_pairs, friction_patch};
 use crate::solver::{
     Constraint, ConstraintGroup, ContactPoint, Friction, HeldPair, Softness, SolverBody, kernel, reference,
 };
@@ -17,6 +18,7 @@ fn lay_out(pairs: &[PairRows], static_slot: u32) -> ConstraintGroup {
     let held: Vec<HeldPair> =
         pairs.iter().map(|p| HeldPair { pair: 0, group: 0, batch: 0, lane: 0, len: p.points.len() as u8 }).collect();
     place_group(&held, 0, &mut group);
+    make_idle(&held, 0, &mut group);
     for (pair, &(batch, lane)) in pairs.iter().zip(&group.placed) {
         let batch = &mut group.batches[batch as usize];
         batch.set(usize::from(lane), &pair.constraint);
