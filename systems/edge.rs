@@ -40,7 +40,9 @@ pub fn edge_contact(a: &Posed, b: &Posed) -> Option<Contact> {
 fn edge_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) -> Option<Contact> {
     let eps = b.tolerance();
     let reach = b.reach();
-    let (many, mut hint) = (is_many_faced(b), 0);
+    // The near-face walks start at b's vertex nearest a (its centre walk's end): the edges
+    // tried lie around it, and any start gives a sound proof.
+    let (many, mut hint) = (is_many_faced(b), hints[1].unwrap_or(0));
     if is_many_faced(a) {
         features_below(a, b, (Kind::Edges, &hints), flood);
     }

@@ -33,7 +33,9 @@ fn vertex_contact_from(a: &Posed, b: &Posed, hints: Hints, flood: &mut Flood) ->
     let (mut sum, mut count) = (Vector::ZERO, 0_u32);
     let mut deepest = (Scalar::INFINITY, Vector::ZERO);
     let reach = b.reach();
-    let (many, mut hint) = (is_many_faced(b), 0);
+    // The near-face walks start at b's vertex nearest a (its centre walk's end): the points
+    // tried lie around it, and any start gives a sound proof.
+    let (many, mut hint) = (is_many_faced(b), hints[1].unwrap_or(0));
     // Only vertices within b's bounds can be inside it: on a many-faced body, a handful, and
     // of those most are shown outside by a face near them before all faces are tried.
     if is_many_faced(a) {

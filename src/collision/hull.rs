@@ -113,18 +113,33 @@ pub fn outside_near_face(b: &Posed, p: Vector, eps: Scalar, hint: &mut u32) -> b
     beyond_near_face(b, &[p], eps, hint)
 }
 
-/// As `outside_near_face` for every point of `points` beyond one and the same face plane: then
-/// their segment (or hull) lies outside `b` too.
+/// As `outside_near_face` for every point of `points` (at most two) beyond one and the same
+/// face plane: then their segment (or hull) lies outside `b` too.
+///
+/// The points are taken into `b`'s body frame, where the planes need no turning, and must be
+/// beyond a plane there by `eps` plus a slack far above the round-off between the frames: a
+/// proof here is one the world planes give too, and a point too near to tell is left to the
+/// full test, which then answers as it would have.
 #[must_use]
 pub fn beyond_near_face(b: &Posed, points: &[Vector], eps: Scalar, hint: &mut u32) -> bool {
+    debug_assert!(points.len() <= 2, "one point or a segment");
     let towards = points.iter().sum::<Vector>() / points.len().max(1) as Scalar - b.position;
-    let (top, _) = lowest_vertex(b, -towards, *hint);
+    let rows = b.rotation.transpose();
+    let (top, _) = walk_down(&b.mesh, &b.mesh.vertices, -(rows * towards), *hint);
     *hint = top;
+    let mut body = [Vector::ZERO; 2];
+    let mut far = 0.0;
+    for (q, &p) in body.iter_mut().zip(points) {
+        *q = rows * (p - b.position);
+        far = p.length().max(far);
+    }
+    let body = &body[..points.len().min(2)];
+    let margin = eps + 1e-9 * (1.0 + b.position.length() + b.mesh.radius + far);
     let m = &b.mesh;
-    m.vertex_faces[m.vertex_face_start[top as usize] as usize..m.vertex_face_start[top as usize + 1] as usize]
+    row(&m.vertex_faces, &m.vertex_face_start, top)
         .iter()
-        .map(|&f| b.plane(f as usize))
-        .any(|pl| points.iter().all(|&p| pl.normal.dot(p) - pl.offset > eps))
+        .map(|&f| &m.planes[f as usize])
+        .any(|pl| body.iter().all(|&q| pl.normal.dot(q) - pl.offset > margin))
 }
 
 /// `lowest_vertex` started from the mesh's seed vertex of the cube direction nearest `−dir`
@@ -345,6 +360,42 @@ struct Near {
     all: bool,
     /// Scratch of `best_grouped`: each plane group's bound and index.
     groups: Vec<(Scalar, u32)>,
+    /// The world normals of the faces around the edges `best_among` pairs.
+    normals: Normals,
+}
+
+/// World face normals of one body, each turned once a search (`best_among`'s edge pairs read
+/// a face's normal for each edge around it): the same arithmetic as `Posed::plane`, so the
+/// same bits.
+#[derive(Default)]
+struct Normals {
+    /// The search in which each face's normal was turned; 0 for none.
+    stamp: Vec<u32>,
+    normal: Vec<Vector>,
+    search: u32,
+}
+
+impl Normals {
+    /// Starts a search of body `p`: every normal is to be turned afresh.
+    fn begin(&mut self, p: &Posed) {
+        let count = p.plane_count();
+        if self.stamp.len() < count || self.search == u32::MAX {
+            self.stamp.clear();
+            self.stamp.resize(count.max(self.normal.len()), 0);
+            self.normal.resize(self.stamp.len(), Vector::ZERO);
+            self.search = 0;
+        }
+        self.search += 1;
+    }
+
+    /// The world normal of face `f` of the body of this search.
+    fn get(&mut self, p: &Posed, f: u32) -> Vector {
+        let i = f as usize;
+        if self.stamp[i] != self.search {
+            (self.stamp[i], self.normal[i]) = (self.search, p.plane(i).normal);
+        }
+        self.normal[i]
+    }
 }
 
 thread_local! {
@@ -396,8 +447,8 @@ fn near(p: &Posed, (wide, tight): (&Region, &Region), from: u32, out: &mut Near)
     edge_set.reset(m.feature_edges.len());
     if wide.is_everywhere() {
         // The flood would reach every vertex (the mesh is connected), so every face: the same
-        // lists without the flood.
-        faces.extend(0..m.planes.len() as u32);
+        // lists without the flood, the faces left implied by `all` (`best_among` lists them
+        // only if it iterates them rather than taking them by plane group).
         // An empty tight box (bodies apart along a world axis) holds no vertex: only the
         // start's edges.
         let (lo, hi) = tight.bounds;
@@ -470,6 +521,21 @@ impl Rough {
 fn pick(p: &Posed, normal: Vector, (start, last): (u32, u32)) -> (u32, Scalar) {
     let (at_start, at_last) = (p.vertices[start as usize].dot(normal), p.vertices[last as usize].dot(normal));
     if at_last < at_start { (last, at_last) } else { (start, at_start) }
+}
+
+/// A face of many-faced `b` among those `best_among` tries (one around `start_b`, the flood's
+/// start, which every flood takes in), the one most along the line of centres, and `a`'s
+/// exact separation along its normal, walked from `start_a`: (separation, the walk's end).
+/// Any face would do; this one tends to be near the best, so its separation prunes most.
+fn floor_face(a: &Posed, b: &Posed, (start_a, start_b): (u32, u32)) -> (Scalar, u32) {
+    let m = &b.mesh;
+    let d = b.rotation.transpose() * (a.position - b.position);
+    let around = row(&m.vertex_faces, &m.vertex_face_start, start_b);
+    let along = |f: &&u32| m.planes[**f as usize].normal.dot(d);
+    let face = *around.iter().max_by(|x, y| along(x).total_cmp(&along(y))).unwrap_or(&0);
+    let pl = b.plane(face as usize);
+    let (end, lowest) = lowest_vertex(a, pl.normal, start_a);
+    (lowest - pl.offset, end)
 }
 
 /// Among every face of many-faced `q`, the one along whose normal `p` lies farthest out (or
@@ -576,11 +642,21 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
 }
 
 /// `contact_axis_near`'s choice among the features `na` of A and `nb` of B.
-fn best_among(a: &Posed, b: &Posed, (na, nb): (&Near, &mut Near), (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
-    let (ea, eb) = (&na.edges, &nb.edges);
-    if na.faces.is_empty() || nb.faces.is_empty() {
+fn best_among(
+    a: &Posed,
+    b: &Posed,
+    (na, nb): (&mut Near, &mut Near),
+    (margin, reach): (Scalar, Scalar),
+) -> Option<Axis> {
+    // A many-faced body's faces at an unlimited reach are taken by plane group (below, B's
+    // always, A's without a preference); A's are listed only if iterated.
+    if na.all && na.faces.is_empty() && !(PREFER * margin == 0.0 && is_many_faced(a)) {
+        na.faces.extend(0..a.plane_count() as u32);
+    }
+    if (na.faces.is_empty() && !na.all) || (nb.faces.is_empty() && !nb.all) {
         return crate::collision::manifold::contact_axis_all(a, b, (margin, reach));
     }
+    let (ea, eb) = (&na.edges, &nb.edges);
     let mut best: Option<Axis> = None;
     // An axis is taken only if it beats the best so far by `prefer`; a face whose bound (the
     // other body's start vertex, no lower than its lowest) cannot do that needs no walk.
@@ -600,13 +676,24 @@ fn best_among(a: &Posed, b: &Posed, (na, nb): (&Near, &mut Near), (margin, reach
     } else {
         let mut last = na.start;
         let mut rough = Rough::of(b, [a.vertices[na.start as usize]; 2]);
+        // B's faces give the first face of the largest separation, which is at least that of
+        // any one face among them: with one walked first, faces bounded below it need no walk.
+        let floor = rough.as_mut().map_or(Scalar::NEG_INFINITY, |r| {
+            let (separation, end) = floor_face(a, b, (na.start, nb.start));
+            last = end;
+            r.set_last(b, a.vertices[end as usize]);
+            separation
+        });
         for &f in &nb.faces {
-            if rough.as_ref().is_some_and(|r| !wins(&best, r.bound(b, f), 0.0)) {
+            if rough.as_ref().is_some_and(|r| {
+                let bound = r.bound(b, f);
+                bound < floor || !wins(&best, bound, 0.0)
+            }) {
                 continue;
             }
             let pl = b.plane(f as usize);
             let (from, bound) = pick(a, pl.normal, (na.start, last));
-            if wins(&best, bound - pl.offset, 0.0) {
+            if bound - pl.offset >= floor && wins(&best, bound - pl.offset, 0.0) {
                 let (end, lowest) = lowest_vertex(a, pl.normal, from);
                 last = end;
                 if let Some(r) = rough.as_mut() {
@@ -644,15 +731,18 @@ fn best_among(a: &Posed, b: &Posed, (na, nb): (&Near, &mut Near), (margin, reach
     nb.groups = groups;
     // B's edges' arcs, turned once for all of A's edges.
     let mut arcs_b = std::mem::take(&mut nb.arcs);
+    let (mut turned_a, mut turned_b) = (std::mem::take(&mut na.normals), std::mem::take(&mut nb.normals));
+    turned_b.begin(b);
     arcs_b.clear();
     arcs_b.extend(eb.iter().map(|&e| {
-        let [h, m] = b.mesh.feature_edge_faces[e as usize].map(|f| -b.plane(f as usize).normal);
+        let [h, m] = b.mesh.feature_edge_faces[e as usize].map(|f| -turned_b.get(b, f));
         (h, m)
     }));
-    for &ea in ea {
+    turned_a.begin(a);
+    for &ea in if arcs_b.is_empty() { &[][..] } else { &ea[..] } {
         let ([i, j], [f, g]) = (a.mesh.feature_edges[ea as usize], a.mesh.feature_edge_faces[ea as usize]);
         let (a0, a1) = (a.vertices[i as usize], a.vertices[j as usize]);
-        let (fa, ga) = (a.plane(f as usize).normal, a.plane(g as usize).normal);
+        let (fa, ga) = (turned_a.get(a, f), turned_a.get(a, g));
         for (&eb, &(hb, mb)) in eb.iter().zip(&arcs_b) {
             if !arcs_cross(fa, ga, hb, mb) {
                 continue;
@@ -665,7 +755,7 @@ fn best_among(a: &Posed, b: &Posed, (na, nb): (&Near, &mut Near), (margin, reach
             consider(&mut best, n, n.dot(a0 - b0), Reference::Edges, PREFER * margin);
         }
     }
-    nb.arcs = arcs_b;
+    (nb.arcs, na.normals, nb.normals) = (arcs_b, turned_a, turned_b);
     best.filter(|x| x.separation <= reach)
 }
 

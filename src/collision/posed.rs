@@ -277,13 +277,43 @@ impl Posed {
     /// The face whose outward normal is most along `dir` (world), with that cosine.
     #[must_use]
     pub fn most_along(&self, dir: Vector) -> Option<(Scalar, usize)> {
-        let (d, planes) = if !self.mesh.is_many_faced() {
-            (dir, self.world_planes())
-        } else {
-            (self.rotation.transpose() * dir, &self.mesh.planes[..])
-        };
-        planes.iter().enumerate().map(|(f, pl)| (pl.normal.dot(d), f)).max_by(|x, y| x.0.total_cmp(&y.0))
+        if !self.mesh.is_many_faced() {
+            let planes = self.world_planes();
+            return planes.iter().enumerate().map(|(f, pl)| (pl.normal.dot(dir), f)).max_by(|x, y| x.0.total_cmp(&y.0));
+        }
+        most_along_grouped(&self.mesh, self.rotation.transpose() * dir)
     }
+}
+
+/// `most_along` of a many-faced mesh for body-frame `d`, by plane group: the group of the
+/// largest bound is scanned first, then only groups whose bound (`n·d ≤ c·d + spread |d|`,
+/// past round-off) reaches the best so far. The answer of a scan in index order keeping the
+/// last of equal cosines (as `max_by` does), so the same face to the bit.
+fn most_along_grouped(mesh: &ConvexMesh, d: Vector) -> Option<(Scalar, usize)> {
+    let len = d.length();
+    let bound = |g: &crate::model::clusters::PlaneGroup| g.normal.dot(d) + g.spread * len + 1e-12 * len;
+    let groups = &mesh.plane_groups;
+    let first = groups.iter().enumerate().max_by(|x, y| bound(x.1).total_cmp(&bound(y.1)))?.0;
+    let mut best: Option<(Scalar, usize)> = None;
+    for k in std::iter::once(first).chain((0..groups.len()).filter(|&k| k != first)) {
+        let g = &groups[k];
+        if best.is_some_and(|b| bound(g) < b.0) {
+            continue;
+        }
+        for &f in &g.planes {
+            let value = mesh.planes[f as usize].normal.dot(d);
+            // A later face of an equal cosine wins, as in a scan in index order.
+            let wins = |b: (Scalar, usize)| match value.total_cmp(&b.0) {
+                std::cmp::Ordering::Greater => true,
+                std::cmp::Ordering::Equal => f as usize > b.1,
+                std::cmp::Ordering::Less => false,
+            };
+            if best.is_none_or(wins) {
+                best = Some((value, f as usize));
+            }
+        }
+    }
+    best
 }
 
 /// Body-frame plane `p` in the world, for a body turned by `r` with its centre at `x`.
@@ -473,6 +503,26 @@ mod tests {
         let y = 2f64.sqrt() / 2.0 - 0.01;
         let c = clip_segment(&b, Vector::new(0.0, y, -0.5), Vector::new(0.0, y, 0.5), 0.0).expect("crosses");
         assert!((c.t_in - 0.49).abs() < 1e-12 && (c.t_out - 0.51).abs() < 1e-12, "{c:?}");
+    }
+
+    #[test]
+    fn the_face_most_along_a_direction_by_plane_group_is_the_scanned_one() {
+        let mut rng = crate::rng::SplitMix64::new(23);
+        let mut random = || Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5);
+        for s in [2, 3] {
+            let (v, t) = crate::model::shapes::icosphere_raw(0.5, s);
+            let mesh = ConvexMesh::new(v, t).expect("an icosphere is valid").0;
+            let scan = |d: Vector| {
+                let cosines = mesh.planes.iter().enumerate().map(|(f, pl)| (pl.normal.dot(d), f));
+                cosines.max_by(|x, y| x.0.total_cmp(&y.0))
+            };
+            // Random directions, and the axes and diagonals, where faces tie.
+            let mut directions: Vec<Vector> = (0..500).map(|_| random()).collect();
+            directions.extend([Vector::X, Vector::Y, Vector::Z, -Vector::Y, Vector::ONE, Vector::new(1.0, -1.0, 0.0)]);
+            for d in directions {
+                assert_eq!(most_along_grouped(&mesh, d), scan(d), "{d}");
+            }
+        }
     }
 
     #[test]
