@@ -96,7 +96,7 @@ fn studio_at_4000_bodies() {
     let runs =
         GL_PATHS.iter().map(|&(flag, label)| (flag, label, "")).chain([(GL_PATHS[0].0, "use-gl, scale 1", "&adapt=0")]);
     for (flag, label, query) in runs {
-        let lines = page_fps(&format!("http://{}/?log=1{query}", s.addr), 20, flag);
+        let lines = page_fps(&format!("http://{}/?log=1{query}", s.addr), 30, flag);
         for l in &lines {
             println!("  {label}: {l}");
         }
@@ -108,11 +108,18 @@ fn studio_at_4000_bodies() {
         let fetched = median(settled.iter().map(|l| field(l, "frames")).collect());
         let scales: Vec<f64> = settled.iter().map(|l| field(l, "scale")).collect();
         let last = scales.last().copied().unwrap_or(f64::NAN);
+        // Once the adaptive scale has found its level: the seconds after its last change, less
+        // the second the change fell in.
+        let since = scales.iter().rposition(|&x| x != last).map_or(0, |i| i + 2);
+        let steady: Vec<f64> = settled.iter().skip(since).map(|l| field(l, "drawn")).collect();
+        let steady_seconds = steady.len();
         println!(
             "page, headless Chromium ({flag}{query} --enable-unsafe-swiftshader, 1000x700), playing: median \
              {drawn:.1} frames drawn/s, {fetched:.1} new states/s, render scale {:.2} (median; {last} at the end); \
+             at scale {last} after its last change: median {:.1} frames drawn/s over {steady_seconds} s; \
              server meanwhile {sps:.1} steps/s",
-            median(scales.clone())
+            median(scales.clone()),
+            median(steady)
         );
     }
 }

@@ -58,7 +58,7 @@ try {
 // of its pixels (the browser stretches it to the viewport); with half as many frames again to
 // spare it goes back up. A software renderer spends about a third of a frame filling pixels
 // (BENCH.md, issue #21). Shown in the viewport's corner whenever below 1.
-const SCALES = [1, 0.85, 0.7, 0.6, 0.5];
+const SCALES = [1, 0.85, 0.7, 0.6, 0.5, 0.4];
 const adapt = {
   on: params.get('adapt') !== '0',
   target: Number(params.get('fps')) > 0 ? Number(params.get('fps')) : 30,

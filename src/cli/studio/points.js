@@ -132,7 +132,7 @@ void main() {
   vRayY = toBox[1] * (2.0 / (viewport.w * projectionMatrix[1][1]));
   vRay0 = toBox * vec3((projectionMatrix[2][0] - 1.0 - 2.0 * viewport.x / viewport.z) / projectionMatrix[0][0],
                        (projectionMatrix[2][1] - 1.0 - 2.0 * viewport.y / viewport.w) / projectionMatrix[1][1], -1.0);
-  gl_PointSize = 2.0 * halfSide(centre.xyz, radius, 0.5 * viewport.w * projectionMatrix[1][1]) + 2.0;
+  gl_PointSize = 2.0 * halfSide(centre.xyz, radius, 0.5 * viewport.w * projectionMatrix[1][1]) + 1.0;
   gl_Position = projectionMatrix * centre;
 }`,
     fragmentShader: `uniform mat4 projection;
