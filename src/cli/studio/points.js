@@ -39,8 +39,8 @@ const GLSL_HALF_SIDE = `float halfSide(vec3 c, float r, float f) {
 
 // Per free box group: which members are points this frame. Fills `pointIndex` with the members
 // drawn as points and `hexIndex` with the hexagon triangles of the rest (18 indices a member,
-// 7 corners apart), and says whether either changed. `poses` is the group's pose texture data
-// (8 floats a member: position, then the quaternion).
+// 7 corners apart), and says whether either changed. The poses are read from the group's pose
+// texture (8 floats a member: position, then the quaternion).
 export function chooseDetail(g, camera, width, height) {
   const view = camera.matrixWorldInverse.elements;
   const p = camera.projectionMatrix.elements;
@@ -59,7 +59,8 @@ export function chooseDetail(g, camera, width, height) {
     const y = view[1] * wx + view[5] * wy + view[9] * wz + view[13];
     const z = view[2] * wx + view[6] * wy + view[10] * wz + view[14];
     const half = halfSide(x, y, z, g.radius, f);
-    let point = half >= 0 && 2 * half + 2 <= POINT_MAX_PX;
+    // The point's side as the vertex shader sizes it.
+    let point = half >= 0 && 2 * half + 1 <= POINT_MAX_PX;
     if (point) {
       // The centre's pixel, and the square around it, inside the viewport.
       const sx = 0.5 * width * (1 + (p[0] * x + p[8] * z) / -z);
