@@ -7,7 +7,7 @@
 
 import * as THREE from './three.module.min.js';
 import { OrbitControls } from './OrbitControls.js';
-import { POINT_MAX_PX, chooseDetail, pointBoxMaterial } from './points.js';
+import { HEXAGON_TRIANGLES, POINT_MAX_PX, chooseDetail, pointBoxMaterial } from './points.js';
 
 const $ = (id) => document.getElementById(id);
 const params = new URLSearchParams(location.search);
@@ -235,9 +235,6 @@ function hexagonBoxGeometry([hx, hy, hz]) {
   return g;
 }
 
-// Faces +y (1 2 3), +z (3 4 5), +x (5 6 1), each as two triangles from the near corner.
-const HEXAGON_TRIANGLES = [0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5, 0, 5, 6, 0, 6, 1];
-
 // `count` copies of `geometry`, each vertex tagged with its copy's index, coloured per copy.
 function mergedGeometry(geometry, members, coloured) {
   const v = geometry.getAttribute('position').count;
@@ -287,7 +284,6 @@ function pointsOf(g, box) {
   const points = new THREE.Points(geometry, pointBoxMaterial(g.poses, box, POSE_WIDTH, uniforms));
   points.frustumCulled = false;
   g.radius = Math.hypot(...box);
-  g.hexPattern = HEXAGON_TRIANGLES;
   g.hexIndex = g.draw.geometry.getIndex().array;
   g.draw.geometry.getIndex().setUsage(THREE.DynamicDrawUsage);
   g.pointIndex = geometry.getIndex().array;

@@ -8,6 +8,10 @@
 
 import * as THREE from './three.module.min.js';
 
+// A box's hexagon (app.js): its near corner 0 and the ring 1..6 around it; faces +y (1 2 3),
+// +z (3 4 5), +x (5 6 1), each as two triangles from the near corner.
+export const HEXAGON_TRIANGLES = [0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5, 0, 5, 6, 0, 6, 1];
+
 // Largest point [drawing-buffer pixels]: beyond it the hexagon is cheaper.
 export const POINT_MAX_PX = 16;
 
@@ -73,8 +77,8 @@ export function chooseDetail(g, camera, width, height) {
       g.pointIndex[points++] = k;
     } else {
       const at = 18 * hexes++;
-      if (g.hexIndex[at] !== g.hexPattern[0] + 7 * k) changed = true;
-      for (let j = 0; j < 18; j++) g.hexIndex[at + j] = g.hexPattern[j] + 7 * k;
+      if (g.hexIndex[at] !== HEXAGON_TRIANGLES[0] + 7 * k) changed = true;
+      for (let j = 0; j < 18; j++) g.hexIndex[at + j] = HEXAGON_TRIANGLES[j] + 7 * k;
     }
   }
   changed ||= points !== g.points || hexes !== g.hexes;
