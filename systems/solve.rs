@@ -26,7 +26,7 @@ use crate::collision::manifold::{ClipScratch, Manifold, contact_axis, manifold, 
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
-use crate::solver::{CachedManifold, ContactAnchors, Recycling, SolveScratch, cache_entries};
+use crate::solver::{CachedManifold, ContactAnchors, Recycling, SolveScratch, cache_entries, recycle_four};
 use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prepare_joints};
 use hecs::World;
 use rayon::prelude::*;
@@ -174,6 +174,31 @@ pub(super) fn recycled_points(
     still(old, b, ia, ib, RECYCLE_DISTANCE * thin).then(|| placed(old, b, ia, ib))
 }
 
+/// `prune`'s verdicts of four pairs at once: `recycled_points` and `recycled_contact` (with the
+/// feature `Face`) into `out[l]` for lane l, the cache entry `old[l]` of the bodies `ends[l]`,
+/// `thin[l]` the thinner one's thickness; lanes without an `out` are idle. The same bits as
+/// one pair at a time (`solver::recycle_four`); a lane the quick bound does not prove still is
+/// worked out alone.
+pub(super) fn recycled_four(
+    old: [&ContactAnchors; 4],
+    b: &Bodies,
+    thin: [Scalar; 4],
+    ends: [(usize, usize); 4],
+    mut out: [Option<&mut Recycling>; 4],
+) {
+    let placed = out.each_mut().map(|r| r.as_deref_mut().map(|r| r.manifold.insert(Manifold::default())));
+    let (still, normal) = recycle_four(old, ends, thin.map(|t| RECYCLE_DISTANCE * t), b, placed);
+    for (l, r) in out.into_iter().enumerate() {
+        let Some(r) = r else { continue };
+        if let Some(m) = r.manifold.as_mut().filter(|_| still[l]) {
+            m.len = old[l].len;
+        } else {
+            r.manifold = recycled_points(old[l], b, thin[l], ends[l].0, ends[l].1);
+        }
+        r.contact = r.manifold.as_ref().and_then(|m| held_at(m, normal[l], Feature::Face));
+    }
+}
+
 /// The contact a recycled pair is held at, found by `feature`: the deepest of its kept points
 /// `m`, with the kept normal turned with A; `None` when no point is kept. It is also the
 /// contact `prune` gives a pair it takes out of the tests (docs/physics.md §6.3).
@@ -184,8 +209,12 @@ pub(super) fn recycled_contact(
     ia: usize,
     feature: Feature,
 ) -> Option<Contact> {
+    held_at(m, b.rotation[ia] * old.normal, feature)
+}
+
+/// `recycled_contact` given the kept normal turned with A.
+fn held_at(m: &Manifold, normal: Vector, feature: Feature) -> Option<Contact> {
     let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y]))?;
-    let normal = b.rotation[ia] * old.normal;
     Some(Contact { point: m.points[deepest], normal, depth: -m.gaps[deepest], feature })
 }
 
@@ -330,6 +359,64 @@ fn remember(ctx: &mut StepContext) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A random unit quaternion.
+    fn turn(rng: &mut crate::rng::SplitMix64) -> Quat {
+        let v = Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+        Quat::from_axis_angle(v.normalize_or(Vector::X), rng.uniform(-3.0, 3.0))
+    }
+
+    #[test]
+    fn four_pairs_recycled_as_one_at_a_time() {
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let mut b = Bodies::default();
+        for _ in 0..8 {
+            let q = turn(&mut rng);
+            b.position.push(Vector::new(rng.uniform(-2.0, 2.0), rng.uniform(0.0, 3.0), rng.uniform(-2.0, 2.0)));
+            b.orientation.push(q);
+            b.rotation.push(crate::math::Mat3::from_quat(q));
+            b.radius.push(rng.uniform(0.2, 1.5));
+        }
+        let (mut still, mut moved) = (0, 0);
+        for _ in 0..400 {
+            let ends: [(usize, usize); 4] = std::array::from_fn(|_| {
+                let ia = (rng.next_u64() % 8) as usize;
+                (ia, (ia + 1 + (rng.next_u64() % 7) as usize) % 8)
+            });
+            let anchors: [ContactAnchors; 4] = std::array::from_fn(|l| {
+                let mut m = Manifold { len: 1 + (rng.next_u64() % 4) as usize, ..Manifold::default() };
+                for k in 0..m.len {
+                    m.points[k] = Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(0.0, 2.0), rng.uniform(-1.0, 1.0));
+                    m.gaps[k] = rng.uniform(-0.01, 0.01);
+                }
+                let normal = turn(&mut rng) * Vector::Y;
+                fixed_to_bodies(&m, normal, &b, ends[l].0, ends[l].1)
+            });
+            // Then the bodies move by anything from nothing to far more than the distance.
+            let before = b.clone();
+            for i in 0..8 {
+                let size = 10.0_f64.powf(rng.uniform(-9.0, -1.0));
+                b.position[i] +=
+                    Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)) * size;
+                let q = (Quat::from_scaled_axis(turn(&mut rng).xyz() * size) * b.orientation[i]).normalize();
+                (b.orientation[i], b.rotation[i]) = (q, crate::math::Mat3::from_quat(q));
+            }
+            let thin: [Scalar; 4] = std::array::from_fn(|_| rng.uniform(0.1, 1.0));
+            let mut four = [Recycling::default(); 4];
+            let [r0, r1, r2, r3] = four.each_mut();
+            recycled_four(anchors.each_ref(), &b, thin, ends, [Some(r0), Some(r1), Some(r2), Some(r3)]);
+            for l in 0..4 {
+                let (ia, ib) = ends[l];
+                let m = recycled_points(&anchors[l], &b, thin[l], ia, ib);
+                let c = m.as_ref().and_then(|m| recycled_contact(m, &anchors[l], &b, ia, Feature::Face));
+                // Debug prints every distinct f64 (signed zeros too) differently.
+                assert_eq!(format!("{:?}", (four[l].manifold, four[l].contact)), format!("{:?}", (m, c)));
+                if m.is_some() { still += 1 } else { moved += 1 }
+            }
+            b = before;
+        }
+        assert!(still > 200 && moved > 200, "both kinds of pair: {still} still, {moved} moved");
+    }
 
     #[test]
     fn the_arc_cosine_bound_is_never_below_the_arc_cosine() {
