@@ -140,7 +140,8 @@ pub struct SolveScratch {
     pub recycled: Vec<bool>,
     /// Each pair's index in `cache` (`u32::MAX` for none).
     pub cached: Vec<u32>,
-    /// Scratch of `solve::remember`: the held pairs' indices into `held`, in pair order.
+    /// The held pairs' indices into `held` (their places in the solving order), in pair order,
+    /// so by cache entry: `solve::remember` fills it, and the next step's order starts from it.
     pub by_pair: Vec<u32>,
     /// Last step's anchors and impulses by pair, in pair order (found through `cached`).
     pub cache: Vec<((u32, u32), CachedManifold)>,
@@ -162,6 +163,8 @@ pub struct SolveScratch {
     pub after: Vec<(Vector, Vector, Vector, Quat)>,
     /// Scratch: each free body's coordinate along the split, with its actor index.
     pub keys: Vec<(u64, u32)>,
+    /// Scratch of the solving order's sort: the held pairs by their place in last step's order.
+    pub ranked: Vec<(u64, u32)>,
     /// Each actor's solver-body slot (`u32::MAX` when not in a held pair this step; fixed
     /// bodies map to the last static slot).
     pub slot: Vec<u32>,
