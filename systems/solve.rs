@@ -106,8 +106,8 @@ fn find_manifolds(ctx: &mut StepContext) {
     // `prune`'s verdicts, if no body moved since it worked them out (each of this step).
     let judged: &[Recycling] = if s.recycling_moves == ctx.posed.moves() { &s.recycling } else { &[] };
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
-    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter_mut())).zip(cached.par_iter());
-    rows.for_each(|(((pair, m), (anchors, recycled)), &entry)| {
+    let rows = rows.zip(s.recycled.par_iter_mut()).zip(cached.par_iter());
+    rows.for_each(|(((pair, m), recycled), &entry)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
         let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.anchors);
@@ -115,7 +115,8 @@ fn find_manifolds(ctx: &mut StepContext) {
         let verdict = judged.get(entry as usize).filter(|v| v.step == Some(step));
         let kept = old.and_then(|g| verdict.map_or_else(|| recycled_points(g, b, thin, ia, ib), |v| v.manifold));
         if let (Some(old), Some(kept)) = (old, kept) {
-            (*recycled, *anchors, *m) = (true, *old, kept);
+            // The anchors stay in the cache entry (`remember` reads them there).
+            (*recycled, *m) = (true, kept);
             let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
             let contact = match verdict {
                 Some(v) => v.contact.map(|c| Contact { feature, ..c }),
@@ -327,14 +328,17 @@ fn remember(ctx: &mut StepContext) {
     s.by_pair.retain(|&h| h != u32::MAX);
     // Written in parallel: a serial part of the step waits for both threads.
     let (held, pairs, groups, anchors, near) = (&s.held, &s.pairs, &s.groups, &s.anchors, &s.near);
+    let (recycled, cached, cache) = (&s.recycled, &s.cached, &s.cache);
     let entry = |&h: &u32| {
         let held = &held[h as usize];
+        let k = held.pair as usize;
+        let anchors = if recycled[k] { &cache[cached[k] as usize].1.anchors } else { &anchors[k] };
         let group = &groups[usize::from(held.group)];
         let (batch, lane) = (&group.batches[held.batch as usize], usize::from(held.lane));
         let [n, t1, t2] = batch.axes(lane);
         let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
         let mut entry = CachedManifold {
-            anchors: anchors[held.pair as usize],
+            anchors: *anchors,
             tangent: t1 * j1 + t2 * j2,
             twist: n * jw,
             found: pairs[held.pair as usize].contact().filter(|_| !near[held.pair as usize]).map(|c| c.feature),
@@ -346,7 +350,8 @@ fn remember(ctx: &mut StepContext) {
         let pair = &pairs[held.pair as usize];
         ((pair.a, pair.b), entry)
     };
-    s.by_pair.par_iter().map(entry).collect_into_vec(&mut s.cache);
+    s.by_pair.par_iter().map(entry).collect_into_vec(&mut s.next_cache);
+    std::mem::swap(&mut s.cache, &mut s.next_cache);
     for (&h, (_, entry)) in s.by_pair.iter().zip(&s.cache) {
         let k = s.held[h as usize].pair as usize;
         let pushed = entry.normal.iter().any(|&j| j > 0.0);

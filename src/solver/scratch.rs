@@ -134,7 +134,8 @@ pub struct SolveScratch {
     /// the other, and across (see `solver::build_constraints`). The first two are solved at
     /// once on two threads, the third after them.
     pub groups: [ConstraintGroup; 3],
-    /// Each pair's contact anchors (in `pairs` order), found or recycled this step.
+    /// Each pair's contact anchors (in `pairs` order) when found this step; a recycled pair's
+    /// are its entry's in `cache`, not copied here.
     pub anchors: Vec<ContactAnchors>,
     /// Whether each pair's anchors was recycled from the previous step.
     pub recycled: Vec<bool>,
@@ -145,6 +146,9 @@ pub struct SolveScratch {
     pub by_pair: Vec<u32>,
     /// Last step's anchors and impulses by pair, in pair order (found through `cached`).
     pub cache: Vec<((u32, u32), CachedManifold)>,
+    /// Scratch of `solve::remember`: the next cache, written while the recycled pairs' anchors
+    /// are still read from `cache`, then swapped with it.
+    pub next_cache: Vec<((u32, u32), CachedManifold)>,
     /// `prune`'s recycling verdicts by entry of `cache` (`Recycling`), for `solve` in the
     /// same step; entries of earlier steps are stale, not cleared.
     pub recycling: Vec<Recycling>,
