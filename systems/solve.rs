@@ -22,7 +22,7 @@
 //! here alone.
 
 use crate::collision::contact::{Contact, Feature, Pair, PairState};
-use crate::collision::manifold::{ClipScratch, Manifold, contact_axis, manifold, support_point};
+use crate::collision::manifold::{ClipScratch, MAX_POINTS, Manifold, contact_axis, manifold, support_point};
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
@@ -329,7 +329,9 @@ fn remember(ctx: &mut StepContext) {
     // Written in parallel: a serial part of the step waits for both threads.
     let (held, pairs, groups, anchors, near) = (&s.held, &s.pairs, &s.groups, &s.anchors, &s.near);
     let (recycled, cached, cache) = (&s.recycled, &s.cached, &s.cache);
-    let entry = |&h: &u32| {
+    // Each entry written in place, the anchors field by field: a whole entry built and then
+    // moved in was two calls of memcpy a pair.
+    let entry = |((key, out), &h): (&mut ((u32, u32), CachedManifold), &u32)| {
         let held = &held[h as usize];
         let k = held.pair as usize;
         let anchors = if recycled[k] { &cache[cached[k] as usize].1.anchors } else { &anchors[k] };
@@ -337,20 +339,19 @@ fn remember(ctx: &mut StepContext) {
         let (batch, lane) = (&group.batches[held.batch as usize], usize::from(held.lane));
         let [n, t1, t2] = batch.axes(lane);
         let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
-        let mut entry = CachedManifold {
-            anchors: *anchors,
-            tangent: t1 * j1 + t2 * j2,
-            twist: n * jw,
-            found: pairs[held.pair as usize].contact().filter(|_| !near[held.pair as usize]).map(|c| c.feature),
-            ..CachedManifold::default()
-        };
+        let to = &mut out.anchors;
+        (to.offset, to.turn, to.normal, to.len) = (anchors.offset, anchors.turn, anchors.normal, anchors.len);
+        (to.on_a, to.on_b) = (anchors.on_a, anchors.on_b);
+        (out.tangent, out.twist) = (t1 * j1 + t2 * j2, n * jw);
+        out.found = pairs[k].contact().filter(|_| !near[k]).map(|c| c.feature);
+        out.normal = [0.0; MAX_POINTS];
         for j in 0..usize::from(held.len) {
-            entry.normal[j] = group.points[batch.first as usize + j].impulse[lane];
+            out.normal[j] = group.points[batch.first as usize + j].impulse[lane];
         }
-        let pair = &pairs[held.pair as usize];
-        ((pair.a, pair.b), entry)
+        *key = (pairs[k].a, pairs[k].b);
     };
-    s.by_pair.par_iter().map(entry).collect_into_vec(&mut s.next_cache);
+    s.next_cache.resize(s.by_pair.len(), ((0, 0), CachedManifold::default()));
+    s.next_cache.par_iter_mut().zip(s.by_pair.par_iter()).for_each(entry);
     std::mem::swap(&mut s.cache, &mut s.next_cache);
     for (&h, (_, entry)) in s.by_pair.iter().zip(&s.cache) {
         let k = s.held[h as usize].pair as usize;
