@@ -178,8 +178,7 @@ pub(super) fn recycled_points(
 /// `prune`'s verdicts of four pairs at once: `recycled_points` and `recycled_contact` (with the
 /// feature `Face`) into `out[l]` for lane l, the cache entry `old[l]` of the bodies `ends[l]`,
 /// `thin[l]` the thinner one's thickness; lanes without an `out` are idle. The same bits as
-/// one pair at a time (`solver::recycle_four`); a lane the quick bound does not prove still is
-/// worked out alone.
+/// one pair at a time (`solver::recycle_four`).
 pub(super) fn recycled_four(
     old: [&ContactAnchors; 4],
     b: &Bodies,
@@ -187,16 +186,12 @@ pub(super) fn recycled_four(
     ends: [(usize, usize); 4],
     mut out: [Option<&mut Recycling>; 4],
 ) {
-    let placed = out.each_mut().map(|r| r.as_deref_mut().map(|r| r.manifold.insert(Manifold::default())));
-    let (still, normal) = recycle_four(old, ends, thin.map(|t| RECYCLE_DISTANCE * t), b, placed);
+    let placed = out.each_mut().map(|r| r.as_deref_mut().map(|r| &mut r.manifold));
+    let normal = recycle_four(old, ends, thin.map(|t| RECYCLE_DISTANCE * t), b, placed);
     for (l, r) in out.into_iter().enumerate() {
-        let Some(r) = r else { continue };
-        if let Some(m) = r.manifold.as_mut().filter(|_| still[l]) {
-            m.len = old[l].len;
-        } else {
-            r.manifold = recycled_points(old[l], b, thin[l], ends[l].0, ends[l].1);
+        if let Some(r) = r {
+            r.contact = r.manifold.as_ref().and_then(|m| held_at(m, normal[l], Feature::Face));
         }
-        r.contact = r.manifold.as_ref().and_then(|m| held_at(m, normal[l], Feature::Face));
     }
 }
 

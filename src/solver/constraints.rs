@@ -106,10 +106,10 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
 }
 
 /// Sorts `s.order` starting from last step's solving order: the pairs held then in the order
-/// they were solved (`s.by_pair`, each cache entry's place in it, left by `solve::remember`),
-/// the others after them, then an insertion sort. A resting pile keeps most of its order, so
-/// this does less work than sorting afresh; the keys are distinct (pair indices break ties), so
-/// the result is the same. Past a budget of moves it sorts afresh.
+/// they were solved (`s.by_pair`, each cache entry's place in it, left by `solve::remember`)
+/// finished by an insertion sort (past a budget of moves, sorted afresh), the others sorted on
+/// their own and merged in. A resting pile keeps most of its order, so this does less work than
+/// sorting afresh; the keys are distinct (pair indices break ties), so the result is the same.
 fn sort_from_last_order(s: &mut SolveScratch) {
     let SolveScratch { order, by_pair, cached, cache, ranked, keys, .. } = s;
     if by_pair.len() != cache.len() || order.len() < 2 {
@@ -127,25 +127,38 @@ fn sort_from_last_order(s: &mut SolveScratch) {
             None => keys.push((key, k)),
         }
     }
-    order.clear();
-    order.extend(ranked.iter().filter(|e| e.1 != u32::MAX));
-    order.extend_from_slice(keys);
-    let budget = 8 * order.len();
+    ranked.retain(|e| e.1 != u32::MAX);
+    let budget = 4 * ranked.len();
     let mut moves = 0;
-    for i in 1..order.len() {
-        let x = order[i];
+    for i in 1..ranked.len() {
+        let x = ranked[i];
         let mut j = i;
-        while j > 0 && order[j - 1] > x {
-            order[j] = order[j - 1];
+        while j > 0 && ranked[j - 1] > x {
+            ranked[j] = ranked[j - 1];
             j -= 1;
         }
-        order[j] = x;
+        ranked[j] = x;
         moves += i - j;
         if moves > budget {
-            order.sort_unstable();
-            return;
+            ranked.sort_unstable();
+            break;
         }
     }
+    // The new pairs sorted on their own, then merged in.
+    keys.sort_unstable();
+    order.clear();
+    let (mut i, mut j) = (0, 0);
+    while i < ranked.len() && j < keys.len() {
+        if ranked[i] < keys[j] {
+            order.push(ranked[i]);
+            i += 1;
+        } else {
+            order.push(keys[j]);
+            j += 1;
+        }
+    }
+    order.extend_from_slice(&ranked[i..]);
+    order.extend_from_slice(&keys[j..]);
 }
 
 /// The group of the constraints across the two sides (`SolveScratch::groups`).

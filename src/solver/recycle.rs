@@ -1,5 +1,5 @@
-//! Contact recycling four pairs at a time (`recycle_four`): whether each pair has surely
-//! stayed still since its points were found (`solve::still`'s bound on the arc), and its kept
+//! Contact recycling four pairs at a time (`recycle_four`): whether each pair has stayed
+//! still since its points were found (`solve::still`), and its kept
 //! points placed at the bodies' poses (`solve::placed`). Per lane the arithmetic is the
 //! one-pair code's (glam's matrix, quaternion and dot products), operation for operation in
 //! the same order, so the lanes give the same bits (IEEE f64 lanes; Rust fuses nothing).
@@ -127,47 +127,59 @@ impl Q {
 }
 
 /// Four pairs' recycling at once: lane l is the pair of bodies `ends[l]` with the kept points
-/// `old[l]`, allowed to have moved `distance[l]` [m]; its points placed at the bodies' poses
-/// are written into `out[l]` (lanes without one are idle). Returns per lane whether the quick
-/// bound proves the pair still (when it does not, the exact test must decide, `solve::still`)
-/// and the normal turned with A.
+/// `old[l]`, allowed to have moved `distance[l]` [m] (`solve::still`: the quick bound on the
+/// arc, else the exact arc, worked out alone). Into `out[l]` (lanes without one are idle) go
+/// the kept points placed at the bodies' poses, or `None` when the pair has moved. Returns each
+/// lane's normal turned with A.
 pub fn recycle_four(
     old: [&ContactAnchors; LANES],
     ends: [(usize, usize); LANES],
     distance: [Scalar; LANES],
     b: &Bodies,
-    mut out: [Option<&mut Manifold>; LANES],
-) -> ([bool; LANES], [Vector; LANES]) {
+    mut out: [Option<&mut Option<Manifold>>; LANES],
+) -> [Vector; LANES] {
     let (ia, ib) = (ends.map(|e| e.0), ends.map(|e| e.1));
     let (pa, pb) = (V::gather(|l| b.position[ia[l]]), V::gather(|l| b.position[ib[l]]));
     let ra = M::gather(&b.rotation, ia);
     // `solve::relative`: B's centre in A's frame, B's orientation relative to A's.
     let offset = ra.transpose_mul(pb.sub(pa));
     let turn = Q::gather(|l| b.orientation[ia[l]]).inverse_mul(&Q::gather(|l| b.orientation[ib[l]]));
-    // `solve::still`'s quick bound (`acos_bound`).
+    // `solve::still`'s quick bound (`acos_bound`), and where it fails the exact arc.
     let moved = offset.sub(V::gather(|l| old[l].offset));
     let shift = moved.dot(moved).sqrt();
     let c = turn.dot(&Q::gather(|l| old[l].turn)).abs();
     let x = Reg::ONE - c;
     let bound = (Reg::splat(2.0) * x).sqrt() * (Reg::ONE + x / Reg::splat(6.0)) * Reg::splat(1.0 + 1e-9);
     let radius = Reg::new(ib.map(|i| b.radius[i]));
-    let still = (shift + Reg::splat(2.0) * bound * radius).simd_lt(Reg::new(distance)).to_bitmask();
-    // `solve::placed`.
-    let rb = M::gather(&b.rotation, ib);
+    let quick = (shift + Reg::splat(2.0) * bound * radius).simd_lt(Reg::new(distance)).to_bitmask();
+    let (shift, radius) = (shift.to_array(), radius.to_array());
+    let (tx, ty, tz, tw) = (turn.x.to_array(), turn.y.to_array(), turn.z.to_array(), turn.w.to_array());
+    let still: [bool; LANES] = std::array::from_fn(|l| {
+        let turn = crate::math::Quat::from_xyzw(tx[l], ty[l], tz[l], tw[l]);
+        quick & (1 << l) != 0 || shift[l] + turn.angle_between(old[l].turn) * radius[l] < distance[l]
+    });
     let normal = ra.mul(V::gather(|l| old[l].normal));
+    for (l, o) in out.iter_mut().enumerate() {
+        if let Some(o) = o {
+            **o = still[l].then(|| Manifold { len: old[l].len, ..Manifold::default() });
+        }
+    }
+    // `solve::placed`, if any lane keeps its points.
+    let placing = out.iter().zip(still).any(|(o, s)| o.is_some() && s);
+    let rb = M::gather(&b.rotation, ib);
     let half = Reg::splat(0.5);
-    let most = old.iter().map(|g| g.len).max().unwrap_or(0).min(MAX_POINTS);
+    let most = if placing { old.iter().map(|g| g.len).max().unwrap_or(0).min(MAX_POINTS) } else { 0 };
     for k in 0..most {
         let on_a = pa.add(ra.mul(V::gather(|l| old[l].on_a[k])));
         let on_b = pb.add(rb.mul(V::gather(|l| old[l].on_b[k])));
         let sum = on_a.add(on_b);
         let (x, y, z) = ((half * sum.x).to_array(), (half * sum.y).to_array(), (half * sum.z).to_array());
         let gap = on_a.sub(on_b).dot(normal).to_array();
-        for (l, m) in out.iter_mut().enumerate() {
-            if let Some(m) = m.as_deref_mut().filter(|_| k < old[l].len) {
+        for (l, o) in out.iter_mut().enumerate() {
+            if let Some(m) = o.as_deref_mut().and_then(Option::as_mut).filter(|m| k < m.len) {
                 (m.points[k], m.gaps[k]) = (Vector::new(x[l], y[l], z[l]), gap[l]);
             }
         }
     }
-    (std::array::from_fn(|l| still & (1 << l) != 0), std::array::from_fn(|l| normal.lane(l)))
+    std::array::from_fn(|l| normal.lane(l))
 }
