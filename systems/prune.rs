@@ -2,7 +2,7 @@
 //! early-out that keeps the paper's three tests as the deciders of every contact, because none
 //! of them can fire on a pair it removes (proof on `separated`).
 
-use crate::collision::contact::{Contact, Feature, Pair, PairState};
+use crate::collision::contact::{Contact, Pair, PairState};
 use crate::collision::hull::{Placed, Shape, distance_bound_from, is_many_faced, lowest_vertex_seeded, proved_apart};
 use crate::collision::posed::Posed;
 use crate::math::{Mat3, Quat, Scalar, Vector};
@@ -11,7 +11,7 @@ use crate::sim::bodies::Bodies;
 use crate::sim::context::Params;
 use crate::sim::context::StepContext;
 use crate::solver::{Recycling, SolveScratch, cache_entries};
-use crate::systems::solve::{recycled_contact, recycled_points};
+use crate::systems::solve::recycled_four;
 use hecs::World;
 use rayon::prelude::*;
 
@@ -339,11 +339,25 @@ fn judge_recycling(ctx: &mut StepContext) -> bool {
             s.recycling[entry as usize].step = Some(step);
         }
     }
-    let rows = s.recycling.par_iter_mut().zip(s.cache.par_iter());
-    rows.filter(|(r, _)| r.step == Some(step)).for_each(|(r, ((a, b_), entry))| {
-        let (ia, ib) = (*a as usize, *b_ as usize);
-        r.manifold = recycled_points(&entry.anchors, b, b.thinner(meshes, ia, ib), ia, ib);
-        r.contact = r.manifold.as_ref().and_then(|m| recycled_contact(m, &entry.anchors, b, ia, Feature::Face));
+    // Four entries at a time (`recycled_four`); lanes past the chunk's judged entries repeat
+    // its first one and are idle.
+    let rows = s.recycling.par_chunks_mut(4).zip(s.cache.par_chunks(4));
+    rows.for_each(|(r, entries)| {
+        let mut lanes = [0; 4];
+        let mut out = [None, None, None, None];
+        let mut n = 0;
+        let judged = r.iter_mut().zip(entries).enumerate().filter(|(_, (r, _))| r.step == Some(step));
+        for (j, (r, _)) in judged {
+            (lanes[n], out[n], n) = (j, Some(r), n + 1);
+        }
+        if n == 0 {
+            return;
+        }
+        let first = lanes[0];
+        lanes[n..].fill(first);
+        let ends = lanes.map(|j| (entries[j].0.0 as usize, entries[j].0.1 as usize));
+        let thin = ends.map(|(ia, ib)| b.thinner(meshes, ia, ib));
+        recycled_four(lanes.map(|j| &entries[j].1.anchors), b, thin, ends, out);
     });
     ctx.scratch.get_mut::<PruneScratch>().cached = cached;
     true

@@ -22,11 +22,11 @@
 //! here alone.
 
 use crate::collision::contact::{Contact, Feature, Pair, PairState};
-use crate::collision::manifold::{ClipScratch, Manifold, contact_axis, manifold, support_point};
+use crate::collision::manifold::{ClipScratch, MAX_POINTS, Manifold, contact_axis, manifold, support_point};
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
-use crate::solver::{CachedManifold, ContactAnchors, Recycling, SolveScratch, cache_entries};
+use crate::solver::{CachedManifold, ContactAnchors, Recycling, SolveScratch, cache_entries, recycle_four};
 use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prepare_joints};
 use hecs::World;
 use rayon::prelude::*;
@@ -106,8 +106,8 @@ fn find_manifolds(ctx: &mut StepContext) {
     // `prune`'s verdicts, if no body moved since it worked them out (each of this step).
     let judged: &[Recycling] = if s.recycling_moves == ctx.posed.moves() { &s.recycling } else { &[] };
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
-    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter_mut())).zip(cached.par_iter());
-    rows.for_each(|(((pair, m), (anchors, recycled)), &entry)| {
+    let rows = rows.zip(s.recycled.par_iter_mut()).zip(cached.par_iter());
+    rows.for_each(|(((pair, m), recycled), &entry)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
         let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.anchors);
@@ -115,7 +115,8 @@ fn find_manifolds(ctx: &mut StepContext) {
         let verdict = judged.get(entry as usize).filter(|v| v.step == Some(step));
         let kept = old.and_then(|g| verdict.map_or_else(|| recycled_points(g, b, thin, ia, ib), |v| v.manifold));
         if let (Some(old), Some(kept)) = (old, kept) {
-            (*recycled, *anchors, *m) = (true, *old, kept);
+            // The anchors stay in the cache entry (`remember` reads them there).
+            (*recycled, *m) = (true, kept);
             let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
             let contact = match verdict {
                 Some(v) => v.contact.map(|c| Contact { feature, ..c }),
@@ -174,6 +175,26 @@ pub(super) fn recycled_points(
     still(old, b, ia, ib, RECYCLE_DISTANCE * thin).then(|| placed(old, b, ia, ib))
 }
 
+/// `prune`'s verdicts of four pairs at once: `recycled_points` and `recycled_contact` (with the
+/// feature `Face`) into `out[l]` for lane l, the cache entry `old[l]` of the bodies `ends[l]`,
+/// `thin[l]` the thinner one's thickness; lanes without an `out` are idle. The same bits as
+/// one pair at a time (`solver::recycle_four`).
+pub(super) fn recycled_four(
+    old: [&ContactAnchors; 4],
+    b: &Bodies,
+    thin: [Scalar; 4],
+    ends: [(usize, usize); 4],
+    mut out: [Option<&mut Recycling>; 4],
+) {
+    let placed = out.each_mut().map(|r| r.as_deref_mut().map(|r| &mut r.manifold));
+    let normal = recycle_four(old, ends, thin.map(|t| RECYCLE_DISTANCE * t), b, placed);
+    for (l, r) in out.into_iter().enumerate() {
+        if let Some(r) = r {
+            r.contact = r.manifold.as_ref().and_then(|m| held_at(m, normal[l], Feature::Face));
+        }
+    }
+}
+
 /// The contact a recycled pair is held at, found by `feature`: the deepest of its kept points
 /// `m`, with the kept normal turned with A; `None` when no point is kept. It is also the
 /// contact `prune` gives a pair it takes out of the tests (docs/physics.md §6.3).
@@ -184,8 +205,12 @@ pub(super) fn recycled_contact(
     ia: usize,
     feature: Feature,
 ) -> Option<Contact> {
+    held_at(m, b.rotation[ia] * old.normal, feature)
+}
+
+/// `recycled_contact` given the kept normal turned with A.
+fn held_at(m: &Manifold, normal: Vector, feature: Feature) -> Option<Contact> {
     let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y]))?;
-    let normal = b.rotation[ia] * old.normal;
     Some(Contact { point: m.points[deepest], normal, depth: -m.gaps[deepest], feature })
 }
 
@@ -298,26 +323,31 @@ fn remember(ctx: &mut StepContext) {
     s.by_pair.retain(|&h| h != u32::MAX);
     // Written in parallel: a serial part of the step waits for both threads.
     let (held, pairs, groups, anchors, near) = (&s.held, &s.pairs, &s.groups, &s.anchors, &s.near);
-    let entry = |&h: &u32| {
+    let (recycled, cached, cache) = (&s.recycled, &s.cached, &s.cache);
+    // Each entry written in place, the anchors field by field: a whole entry built and then
+    // moved in was two calls of memcpy a pair.
+    let entry = |((key, out), &h): (&mut ((u32, u32), CachedManifold), &u32)| {
         let held = &held[h as usize];
+        let k = held.pair as usize;
+        let anchors = if recycled[k] { &cache[cached[k] as usize].1.anchors } else { &anchors[k] };
         let group = &groups[usize::from(held.group)];
         let (batch, lane) = (&group.batches[held.batch as usize], usize::from(held.lane));
         let [n, t1, t2] = batch.axes(lane);
         let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
-        let mut entry = CachedManifold {
-            anchors: anchors[held.pair as usize],
-            tangent: t1 * j1 + t2 * j2,
-            twist: n * jw,
-            found: pairs[held.pair as usize].contact().filter(|_| !near[held.pair as usize]).map(|c| c.feature),
-            ..CachedManifold::default()
-        };
+        let to = &mut out.anchors;
+        (to.offset, to.turn, to.normal, to.len) = (anchors.offset, anchors.turn, anchors.normal, anchors.len);
+        (to.on_a, to.on_b) = (anchors.on_a, anchors.on_b);
+        (out.tangent, out.twist) = (t1 * j1 + t2 * j2, n * jw);
+        out.found = pairs[k].contact().filter(|_| !near[k]).map(|c| c.feature);
+        out.normal = [0.0; MAX_POINTS];
         for j in 0..usize::from(held.len) {
-            entry.normal[j] = group.points[batch.first as usize + j].impulse[lane];
+            out.normal[j] = group.points[batch.first as usize + j].impulse[lane];
         }
-        let pair = &pairs[held.pair as usize];
-        ((pair.a, pair.b), entry)
+        *key = (pairs[k].a, pairs[k].b);
     };
-    s.by_pair.par_iter().map(entry).collect_into_vec(&mut s.cache);
+    s.next_cache.resize(s.by_pair.len(), ((0, 0), CachedManifold::default()));
+    s.next_cache.par_iter_mut().zip(s.by_pair.par_iter()).for_each(entry);
+    std::mem::swap(&mut s.cache, &mut s.next_cache);
     for (&h, (_, entry)) in s.by_pair.iter().zip(&s.cache) {
         let k = s.held[h as usize].pair as usize;
         let pushed = entry.normal.iter().any(|&j| j > 0.0);
@@ -330,6 +360,64 @@ fn remember(ctx: &mut StepContext) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A random unit quaternion.
+    fn turn(rng: &mut crate::rng::SplitMix64) -> Quat {
+        let v = Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+        Quat::from_axis_angle(v.normalize_or(Vector::X), rng.uniform(-3.0, 3.0))
+    }
+
+    #[test]
+    fn four_pairs_recycled_as_one_at_a_time() {
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let mut b = Bodies::default();
+        for _ in 0..8 {
+            let q = turn(&mut rng);
+            b.position.push(Vector::new(rng.uniform(-2.0, 2.0), rng.uniform(0.0, 3.0), rng.uniform(-2.0, 2.0)));
+            b.orientation.push(q);
+            b.rotation.push(crate::math::Mat3::from_quat(q));
+            b.radius.push(rng.uniform(0.2, 1.5));
+        }
+        let (mut still, mut moved) = (0, 0);
+        for _ in 0..400 {
+            let ends: [(usize, usize); 4] = std::array::from_fn(|_| {
+                let ia = (rng.next_u64() % 8) as usize;
+                (ia, (ia + 1 + (rng.next_u64() % 7) as usize) % 8)
+            });
+            let anchors: [ContactAnchors; 4] = std::array::from_fn(|l| {
+                let mut m = Manifold { len: 1 + (rng.next_u64() % 4) as usize, ..Manifold::default() };
+                for k in 0..m.len {
+                    m.points[k] = Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(0.0, 2.0), rng.uniform(-1.0, 1.0));
+                    m.gaps[k] = rng.uniform(-0.01, 0.01);
+                }
+                let normal = turn(&mut rng) * Vector::Y;
+                fixed_to_bodies(&m, normal, &b, ends[l].0, ends[l].1)
+            });
+            // Then the bodies move by anything from nothing to far more than the distance.
+            let before = b.clone();
+            for i in 0..8 {
+                let size = 10.0_f64.powf(rng.uniform(-9.0, -1.0));
+                b.position[i] +=
+                    Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)) * size;
+                let q = (Quat::from_scaled_axis(turn(&mut rng).xyz() * size) * b.orientation[i]).normalize();
+                (b.orientation[i], b.rotation[i]) = (q, crate::math::Mat3::from_quat(q));
+            }
+            let thin: [Scalar; 4] = std::array::from_fn(|_| rng.uniform(0.1, 1.0));
+            let mut four = [Recycling::default(); 4];
+            let [r0, r1, r2, r3] = four.each_mut();
+            recycled_four(anchors.each_ref(), &b, thin, ends, [Some(r0), Some(r1), Some(r2), Some(r3)]);
+            for l in 0..4 {
+                let (ia, ib) = ends[l];
+                let m = recycled_points(&anchors[l], &b, thin[l], ia, ib);
+                let c = m.as_ref().and_then(|m| recycled_contact(m, &anchors[l], &b, ia, Feature::Face));
+                // Debug prints every distinct f64 (signed zeros too) differently.
+                assert_eq!(format!("{:?}", (four[l].manifold, four[l].contact)), format!("{:?}", (m, c)));
+                if m.is_some() { still += 1 } else { moved += 1 }
+            }
+            b = before;
+        }
+        assert!(still > 200 && moved > 200, "both kinds of pair: {still} still, {moved} moved");
+    }
 
     #[test]
     fn the_arc_cosine_bound_is_never_below_the_arc_cosine() {

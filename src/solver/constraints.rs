@@ -36,7 +36,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     let height = |m: &Manifold| m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar;
     // Sorted by integer keys (`total_order_key`), cheaper to compare than floats.
     s.order.extend(held.map(|(k, m)| (total_order_key(height(m)), k as u32)));
-    s.order.sort_unstable();
+    sort_from_last_order(s);
     gather_bodies(b, s);
     // Each constraint's group: within the first side, within the second, or across; then its
     // batches, each group placed on its own.
@@ -103,6 +103,62 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         (held.batch, held.lane) = groups[g].placed[next[g]];
         next[g] += 1;
     }
+}
+
+/// Sorts `s.order` starting from last step's solving order: the pairs held then in the order
+/// they were solved (`s.by_pair`, each cache entry's place in it, left by `solve::remember`)
+/// finished by an insertion sort (past a budget of moves, sorted afresh), the others sorted on
+/// their own and merged in. A resting pile keeps most of its order, so this does less work than
+/// sorting afresh; the keys are distinct (pair indices break ties), so the result is the same.
+fn sort_from_last_order(s: &mut SolveScratch) {
+    let SolveScratch { order, by_pair, cached, cache, ranked, keys, .. } = s;
+    if by_pair.len() != cache.len() || order.len() < 2 {
+        order.sort_unstable();
+        return;
+    }
+    // `ranked[r]`: the entry of `order` that was solved r-th last step; the rest in `keys`.
+    ranked.clear();
+    ranked.resize(by_pair.len(), (u64::MAX, u32::MAX));
+    keys.clear();
+    for &(key, k) in order.iter() {
+        let rank = cached.get(k as usize).and_then(|&e| by_pair.get(e as usize)).map(|&r| r as usize);
+        match rank.filter(|&r| r < ranked.len() && ranked[r].1 == u32::MAX) {
+            Some(r) => ranked[r] = (key, k),
+            None => keys.push((key, k)),
+        }
+    }
+    ranked.retain(|e| e.1 != u32::MAX);
+    let budget = 4 * ranked.len();
+    let mut moves = 0;
+    for i in 1..ranked.len() {
+        let x = ranked[i];
+        let mut j = i;
+        while j > 0 && ranked[j - 1] > x {
+            ranked[j] = ranked[j - 1];
+            j -= 1;
+        }
+        ranked[j] = x;
+        moves += i - j;
+        if moves > budget {
+            ranked.sort_unstable();
+            break;
+        }
+    }
+    // The new pairs sorted on their own, then merged in.
+    keys.sort_unstable();
+    order.clear();
+    let (mut i, mut j) = (0, 0);
+    while i < ranked.len() && j < keys.len() {
+        if ranked[i] < keys[j] {
+            order.push(ranked[i]);
+            i += 1;
+        } else {
+            order.push(keys[j]);
+            j += 1;
+        }
+    }
+    order.extend_from_slice(&ranked[i..]);
+    order.extend_from_slice(&keys[j..]);
 }
 
 /// The group of the constraints across the two sides (`SolveScratch::groups`).
@@ -347,4 +403,32 @@ pub(super) fn tangents(n: Vector) -> [Vector; 2] {
     let helper = if n.x.abs() < 0.57 { Vector::X } else { Vector::Y };
     let t1 = n.cross(helper).normalize();
     [t1, n.cross(t1)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_order_from_last_step_sorts_as_sort_unstable() {
+        let mut rng = crate::rng::SplitMix64::new(5);
+        let mut s = SolveScratch::default();
+        for round in 0..200 {
+            let n = (rng.next_u64() % 300) as usize;
+            let keys: Vec<(u64, u32)> = (0..n as u32).map(|k| (rng.next_u64() % (1 + n as u64 / 8), k)).collect();
+            // Last step's ranks and cache entries: a shuffle, stale or lying, or none.
+            let last = if round % 5 == 0 { n + 3 } else { n };
+            s.cache = vec![((0, 0), CachedManifold::default()); last];
+            s.by_pair =
+                (0..last as u32).map(|r| if round % 3 == 0 { (r * 7 + 1) % last.max(1) as u32 } else { r }).collect();
+            s.cached = (0..n as u32)
+                .map(|k| if rng.unit() < 0.1 { u32::MAX } else { (k * 13) % last.max(1) as u32 })
+                .collect();
+            s.order = keys.clone();
+            sort_from_last_order(&mut s);
+            let mut expect = keys;
+            expect.sort_unstable();
+            assert_eq!(s.order, expect, "round {round}");
+        }
+    }
 }

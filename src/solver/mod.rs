@@ -36,6 +36,7 @@ mod joint_system;
 mod joints;
 mod kernel;
 mod lanes;
+mod recycle;
 #[cfg(test)]
 mod reference;
 mod scratch;
@@ -46,6 +47,7 @@ pub(crate) use joint_pass::prepare as prepare_joints;
 pub use joints::{Frame, Joint, JointImpulses, JointKind, Joints, Motor, Spring};
 pub use kernel::{restitution, sweep, warm_start};
 pub use lanes::{Batch, FrictionRows, LaneVectors, Lanes, PointRows};
+pub use recycle::recycle_four;
 pub use scratch::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, Recycling, SolveScratch, cache_entries};
 
 /// A body as the substeps see it.

@@ -134,16 +134,21 @@ pub struct SolveScratch {
     /// the other, and across (see `solver::build_constraints`). The first two are solved at
     /// once on two threads, the third after them.
     pub groups: [ConstraintGroup; 3],
-    /// Each pair's contact anchors (in `pairs` order), found or recycled this step.
+    /// Each pair's contact anchors (in `pairs` order) when found this step; a recycled pair's
+    /// are its entry's in `cache`, not copied here.
     pub anchors: Vec<ContactAnchors>,
     /// Whether each pair's anchors was recycled from the previous step.
     pub recycled: Vec<bool>,
     /// Each pair's index in `cache` (`u32::MAX` for none).
     pub cached: Vec<u32>,
-    /// Scratch of `solve::remember`: the held pairs' indices into `held`, in pair order.
+    /// The held pairs' indices into `held` (their places in the solving order), in pair order,
+    /// so by cache entry: `solve::remember` fills it, and the next step's order starts from it.
     pub by_pair: Vec<u32>,
     /// Last step's anchors and impulses by pair, in pair order (found through `cached`).
     pub cache: Vec<((u32, u32), CachedManifold)>,
+    /// Scratch of `solve::remember`: the next cache, written while the recycled pairs' anchors
+    /// are still read from `cache`, then swapped with it.
+    pub next_cache: Vec<((u32, u32), CachedManifold)>,
     /// `prune`'s recycling verdicts by entry of `cache` (`Recycling`), for `solve` in the
     /// same step; entries of earlier steps are stale, not cleared.
     pub recycling: Vec<Recycling>,
@@ -162,6 +167,8 @@ pub struct SolveScratch {
     pub after: Vec<(Vector, Vector, Vector, Quat)>,
     /// Scratch: each free body's coordinate along the split, with its actor index.
     pub keys: Vec<(u64, u32)>,
+    /// Scratch of the solving order's sort: the held pairs by their place in last step's order.
+    pub ranked: Vec<(u64, u32)>,
     /// Each actor's solver-body slot (`u32::MAX` when not in a held pair this step; fixed
     /// bodies map to the last static slot).
     pub slot: Vec<u32>,
