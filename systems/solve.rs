@@ -22,7 +22,7 @@
 //! here alone.
 
 use crate::collision::contact::{Contact, Feature, Pair, PairState};
-use crate::collision::manifold::{ClipScratch, Manifold, contact_axis, manifold, support_point};
+use crate::collision::manifold::{ClipScratch, Manifold, contact_axis_from, manifold, support_point};
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
@@ -135,8 +135,9 @@ fn find_manifolds(ctx: &mut StepContext) {
     ctx.posed.pose(b, fresh);
     let posed = &ctx.posed;
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
-    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter()));
-    rows.filter(|(_, (_, r))| !**r).for_each_init(ClipScratch::default, |scratch, ((pair, m), (anchors, _))| {
+    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter())).zip(cached.par_iter());
+    let rows = rows.filter(|((_, (_, r)), _)| !**r);
+    rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (anchors, _)), &entry)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
         let reach = reach(ia, ib, thin);
@@ -144,7 +145,9 @@ fn find_manifolds(ctx: &mut StepContext) {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
         // Held along the pair's least-overlap axis (see `contact_axis`), touching or a hair
         // apart (speculatively); the tests' own normal and depth decide only that it touches.
-        let Some(axis) = contact_axis(pa, pb, (margin * thin, reach)) else {
+        // Searched from last step's axis, if the pair was held then.
+        let hint = cache.get(entry as usize).and_then(|e| e.1.anchors.axis);
+        let Some(axis) = contact_axis_from(pa, pb, (margin * thin, reach), hint) else {
             m.len = 0;
             pair.state = PairState::Candidate; // apart: no constraint
             return;
@@ -156,7 +159,7 @@ fn find_manifolds(ctx: &mut StepContext) {
             // Edge across edge, or nothing left by the clipping: one point where they meet.
             (m.points[0], m.gaps[0], m.len) = (point, axis.separation, 1);
         }
-        *anchors = fixed_to_bodies(m, axis.normal, b, ia, ib);
+        *anchors = ContactAnchors { axis: Some(axis.reference), ..fixed_to_bodies(m, axis.normal, b, ia, ib) };
     });
 }
 
