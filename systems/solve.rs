@@ -22,7 +22,7 @@
 //! here alone.
 
 use crate::collision::contact::{Contact, Feature, Pair, PairState};
-use crate::collision::manifold::{ClipScratch, MAX_POINTS, Manifold, contact_axis, manifold, support_point};
+use crate::collision::manifold::{ClipScratch, MAX_POINTS, Manifold, contact_axis_from, manifold, support_point};
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
@@ -136,8 +136,9 @@ fn find_manifolds(ctx: &mut StepContext) {
     ctx.posed.pose(b, fresh);
     let posed = &ctx.posed;
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
-    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter()));
-    rows.filter(|(_, (_, r))| !**r).for_each_init(ClipScratch::default, |scratch, ((pair, m), (anchors, _))| {
+    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter())).zip(cached.par_iter());
+    let rows = rows.filter(|((_, (_, r)), _)| !**r);
+    rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (anchors, _)), &entry)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
         let reach = reach(ia, ib, thin);
@@ -145,7 +146,9 @@ fn find_manifolds(ctx: &mut StepContext) {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
         // Held along the pair's least-overlap axis (see `contact_axis`), touching or a hair
         // apart (speculatively); the tests' own normal and depth decide only that it touches.
-        let Some(axis) = contact_axis(pa, pb, (margin * thin, reach)) else {
+        // Searched from last step's axis, if the pair was held then.
+        let hint = cache.get(entry as usize).and_then(|e| e.1.anchors.axis);
+        let Some(axis) = contact_axis_from(pa, pb, (margin * thin, reach), hint) else {
             m.len = 0;
             pair.state = PairState::Candidate; // apart: no constraint
             return;
@@ -157,7 +160,7 @@ fn find_manifolds(ctx: &mut StepContext) {
             // Edge across edge, or nothing left by the clipping: one point where they meet.
             (m.points[0], m.gaps[0], m.len) = (point, axis.separation, 1);
         }
-        *anchors = fixed_to_bodies(m, axis.normal, b, ia, ib);
+        *anchors = ContactAnchors { axis: Some(axis.reference), ..fixed_to_bodies(m, axis.normal, b, ia, ib) };
     });
 }
 
@@ -334,9 +337,11 @@ fn remember(ctx: &mut StepContext) {
         let (batch, lane) = (&group.batches[held.batch as usize], usize::from(held.lane));
         let [n, t1, t2] = batch.axes(lane);
         let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
+        // Every field named, so a field added to the anchors cannot be left stale here.
+        let ContactAnchors { offset, turn, normal, on_a, on_b, len, axis } = anchors;
         let to = &mut out.anchors;
-        (to.offset, to.turn, to.normal, to.len) = (anchors.offset, anchors.turn, anchors.normal, anchors.len);
-        (to.on_a, to.on_b) = (anchors.on_a, anchors.on_b);
+        (to.offset, to.turn, to.normal, to.len, to.axis) = (*offset, *turn, *normal, *len, *axis);
+        (to.on_a, to.on_b) = (*on_a, *on_b);
         (out.tangent, out.twist) = (t1 * j1 + t2 * j2, n * jw);
         out.found = pairs[k].contact().filter(|_| !near[k]).map(|c| c.feature);
         out.normal = [0.0; MAX_POINTS];

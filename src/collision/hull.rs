@@ -641,6 +641,130 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
     })
 }
 
+/// `contact_axis_near` for a pair whose axis last step was face `f` of `hint` (B's, or A's
+/// when `of_a`): the features near that face's neighbourhood instead of the floods. A climb
+/// over the hinted body's faces, from `f` to the neighbouring face (sharing a vertex) that
+/// parts the bodies more while there is one, finds where the least overlap has moved to (the
+/// separation over a ball's faces has a single hump where the bodies meet); then the same
+/// choice as `contact_axis_near` among the faces and edges around that face and the other
+/// body's vertex lowest along its normal. A pair that moved a little needs a step or two of
+/// the climb, not two floods (Box3D's SAT cache, rapier's manifold reuse).
+#[must_use]
+pub fn contact_axis_hinted(
+    a: &Posed,
+    b: &Posed,
+    (margin, reach): (Scalar, Scalar),
+    (of_a, f): (bool, u32),
+) -> Option<Axis> {
+    let (q, p) = if of_a { (a, b) } else { (b, a) };
+    if f as usize >= q.plane_count() || !(is_many_faced(a) || is_many_faced(b)) {
+        return crate::collision::manifold::contact_axis(a, b, (margin, reach));
+    }
+    let widen = reach.max(0.0) + BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius);
+    let lo = a.bounds.0.max(b.bounds.0) - Vector::splat(widen);
+    let hi = a.bounds.1.min(b.bounds.1) + Vector::splat(widen);
+    if lo.cmpgt(hi).any() {
+        return None; // apart along a coordinate axis by more than reach
+    }
+    let (face, low, separation) = climb(q, p, f);
+    // Edge pairs only where the bodies meet now, as `contact_axis_near` takes them.
+    let touching = separation <= BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius);
+    NEAR.with(|cell| {
+        let (mut held, mut fresh) = (cell.try_borrow_mut(), None);
+        let [na, nb] = match held.as_deref_mut() {
+            Ok(buffers) => buffers,
+            Err(_) => fresh.insert(<[Near; 2]>::default()),
+        };
+        let (nq, np) = if of_a { (na, nb) } else { (nb, na) };
+        around_face(q, face, p.vertices[low as usize], touching, nq);
+        around_vertex(p, low, np);
+        let (na, nb) = if of_a { (nq, np) } else { (np, nq) };
+        best_among(a, b, (na, nb), (margin, reach))
+    })
+}
+
+/// From face `f` of `q`, the face of `q` along whose normal `p` lies farthest out, as far as
+/// moving to a better neighbour (a face sharing a vertex) reaches: (face, `p`'s vertex lowest
+/// along its normal, the separation). A small `q` has no climb: its faces are all tried.
+fn climb(q: &Posed, p: &Posed, f: u32) -> (u32, u32, Scalar) {
+    let pl = q.plane(f as usize);
+    let (mut low, lowest) = lowest_vertex_seeded(p, pl.normal);
+    let (mut face, mut best) = (f, lowest - pl.offset);
+    if !is_many_faced(q) {
+        return (face, low, best);
+    }
+    let m = &q.mesh;
+    loop {
+        let mut rough = Rough::of(q, [p.vertices[low as usize]; 2]).expect("many-faced");
+        let mut next = None;
+        for &v in row(&m.face_vertices, &m.face_start, face) {
+            for &g in row(&m.vertex_faces, &m.vertex_face_start, v) {
+                if g == face || rough.bound(q, g) <= best {
+                    continue;
+                }
+                let pl = q.plane(g as usize);
+                let (end, lowest) = lowest_vertex(p, pl.normal, low);
+                rough.set_last(q, p.vertices[end as usize]);
+                if lowest - pl.offset > best {
+                    (best, next) = (lowest - pl.offset, Some((g, end)));
+                }
+            }
+        }
+        let Some((g, end)) = next else { return (face, low, best) };
+        (face, low) = (g, end);
+    }
+}
+
+/// The features of `q` around its face `f` into `out`: the faces at its vertices, and the
+/// feature edges there when `touching` (else only at the start), the start being the face's
+/// vertex nearest `towards`. A small mesh gives all its features.
+fn around_face(q: &Posed, f: u32, towards: Vector, touching: bool, out: &mut Near) {
+    let m = &q.mesh;
+    out.faces.clear();
+    out.edges.clear();
+    out.all = false;
+    let corners = row(&m.face_vertices, &m.face_start, f);
+    let distance = |v: &&u32| (q.vertices[**v as usize] - towards).length_squared();
+    let start = *corners.iter().min_by(|x, y| distance(x).total_cmp(&distance(y))).unwrap_or(&0);
+    out.start = start;
+    if !is_many_faced(q) {
+        out.faces.extend(0..m.planes.len() as u32);
+        out.edges.extend(0..m.feature_edges.len() as u32);
+        return;
+    }
+    let Near { faces, edges, face_set, edge_set, .. } = out;
+    face_set.reset(m.planes.len());
+    edge_set.reset(m.feature_edges.len());
+    for &v in corners {
+        face_set.extend(row(&m.vertex_faces, &m.vertex_face_start, v));
+    }
+    for &v in if touching { corners } else { std::slice::from_ref(&start) } {
+        edge_set.extend(row(&m.vertex_edges, &m.vertex_edge_start, v));
+    }
+    face_set.sorted_into(faces);
+    edge_set.sorted_into(edges);
+}
+
+/// The features of `p` at its vertex `v` into `out` (the faces and feature edges around it,
+/// `v` the start), or all of a small mesh's. Only `v`'s edges: a ring further out multiplies
+/// the edge pairs tried (and their cost) by about four, for deep overlaps a resting pair has not.
+fn around_vertex(p: &Posed, v: u32, out: &mut Near) {
+    let m = &p.mesh;
+    out.faces.clear();
+    out.edges.clear();
+    out.all = false;
+    out.start = v;
+    if !is_many_faced(p) {
+        out.faces.extend(0..m.planes.len() as u32);
+        out.edges.extend(0..m.feature_edges.len() as u32);
+        return;
+    }
+    out.faces.extend_from_slice(row(&m.vertex_faces, &m.vertex_face_start, v));
+    out.faces.sort_unstable();
+    out.edges.extend_from_slice(row(&m.vertex_edges, &m.vertex_edge_start, v));
+    out.edges.sort_unstable();
+}
+
 /// `contact_axis_near`'s choice among the features `na` of A and `nb` of B.
 fn best_among(
     a: &Posed,
@@ -791,6 +915,48 @@ mod tests {
             let lowest = p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
             assert_eq!(lowest_vertex(&p, dir, start).1, lowest);
         }
+    }
+
+    #[test]
+    fn the_axis_searched_from_last_steps_face_is_as_good_as_the_exhaustive_one() {
+        let (small, box_mesh) = (ball(1), Arc::new(ConvexMesh::cuboid(Vector::new(3.0, 1.0, 3.0))));
+        let mut rng = SplitMix64::new(12);
+        let (margin, reach) = (0.02, 0.05);
+        let lowest = |p: &Posed, d: Vector| p.vertices.iter().map(|v| v.dot(d)).fold(Scalar::INFINITY, Scalar::min);
+        let mut hinted = 0;
+        for case in 0..300 {
+            let dir = Vector::new(rng.unit() - 0.5, rng.unit() - 0.2, rng.unit() - 0.5).normalize();
+            let other = if case % 2 == 0 { small.clone() } else { box_mesh.clone() };
+            let d = 0.95 + 0.03 * (rng.unit() - 0.5);
+            let (turn_a, turn_b) = (random_turn(&mut rng), random_turn(&mut rng));
+            let b = Posed::new(other, &Pose { position: Vector::ZERO, orientation: turn_b });
+            let before = Posed::new(small.clone(), &Pose { position: dir * d, orientation: turn_a });
+            // Last step's axis, then A moved by up to 2 cm and turned by up to 0.05 rad.
+            let Some(last) = contact_axis_near(&before, &b, (margin, reach)) else { continue };
+            let shift = Vector::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5) * 0.04;
+            let nudge = Quat::from_axis_angle(dir.any_orthonormal_vector(), 0.1 * (rng.unit() - 0.5));
+            let a = Posed::new(small.clone(), &Pose { position: dir * d + shift, orientation: nudge * turn_a });
+            let hint = match last.reference {
+                Reference::FaceOfB(f) => (false, f),
+                Reference::FaceOfA(f) => (true, f),
+                Reference::Edges => continue,
+            };
+            hinted += 1;
+            let (from, all) =
+                (contact_axis_hinted(&a, &b, (margin, reach), hint), contact_axis_all(&a, &b, (margin, reach)));
+            match (from, all) {
+                (Some(n), Some(x)) => {
+                    let true_gap = lowest(&a, n.normal) + lowest(&b, -n.normal);
+                    assert!((true_gap - n.separation).abs() < 1e-12, "case {case}: {n:?} really {true_gap}");
+                    assert!(n.separation >= x.separation - PREFER * margin - 1e-12, "case {case}: {n:?} vs {x:?}");
+                }
+                (None, None) => {}
+                // At the reach's edge the local search may keep a pair the exhaustive one parts.
+                (Some(n), None) => assert!(n.separation > 0.0, "case {case}: {n:?}"),
+                other => panic!("case {case}: {other:?}"),
+            }
+        }
+        assert!(hinted > 200, "{hinted}");
     }
 
     #[test]

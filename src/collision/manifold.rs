@@ -2,7 +2,7 @@
 //! press on each other, so a box lying on a face is held at its corners and does not rock
 //! about the single point the detection tests report.
 
-use crate::collision::hull::{contact_axis_near, is_many_faced};
+use crate::collision::hull::{contact_axis_hinted, contact_axis_near, is_many_faced};
 use crate::collision::posed::Posed;
 use crate::math::{Scalar, Vector};
 
@@ -220,6 +220,28 @@ pub fn contact_axis(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> 
         contact_axis_near(a, b, (margin, reach))
     } else {
         contact_axis_all(a, b, (margin, reach))
+    }
+}
+
+/// `contact_axis` for a pair held last step along a face axis (`hint`, that axis's
+/// reference): a pair with a many-faced body searches near that face
+/// (`hull::contact_axis_hinted`) instead of flooding the bodies' overlap; any other pair, or
+/// an edge axis, as `contact_axis`.
+#[must_use]
+pub fn contact_axis_from(
+    a: &Posed,
+    b: &Posed,
+    (margin, reach): (Scalar, Scalar),
+    hint: Option<Reference>,
+) -> Option<Axis> {
+    match hint {
+        Some(Reference::FaceOfB(f)) if is_many_faced(a) || is_many_faced(b) => {
+            contact_axis_hinted(a, b, (margin, reach), (false, f))
+        }
+        Some(Reference::FaceOfA(f)) if is_many_faced(a) || is_many_faced(b) => {
+            contact_axis_hinted(a, b, (margin, reach), (true, f))
+        }
+        _ => contact_axis(a, b, (margin, reach)),
     }
 }
 

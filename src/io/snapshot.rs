@@ -5,7 +5,7 @@
 //! body has been still); JSON floats are written shortest-round-trip and read back exactly.
 
 use crate::collision::contact::Feature;
-use crate::collision::manifold::MAX_POINTS;
+use crate::collision::manifold::{MAX_POINTS, Reference};
 use crate::math::{Quat, Vector};
 use crate::model::components::{Pose, Velocity};
 use crate::sim::Sim;
@@ -58,6 +58,10 @@ pub struct ContactSnapshot {
     /// it keeps while its points are recycled (docs/physics.md §6.3).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub found: Option<String>,
+    /// The axis the points were found along, where the pair's next search starts: `b:F` or
+    /// `a:F` for face F of B or A, `edges` for an edge pair (absent: none known).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<String>,
 }
 
 /// The `sleep` system's state (`step::SleepState`), one entry per actor.
@@ -243,6 +247,11 @@ impl ContactSnapshot {
             tangent: c.tangent.to_array(),
             twist: c.twist.to_array(),
             found: c.found.map(|f| f.name().to_string()),
+            axis: g.axis.map(|r| match r {
+                Reference::FaceOfB(f) => format!("b:{f}"),
+                Reference::FaceOfA(f) => format!("a:{f}"),
+                Reference::Edges => "edges".to_string(),
+            }),
         }
     }
 
@@ -278,6 +287,14 @@ impl ContactSnapshot {
                     .find(|f| f.name() == name)
                     .ok_or_else(|| format!("found: '{name}' is not face, vertex or edge"))?,
             ),
+        };
+        let face = |f: &str| f.parse::<u32>().map_err(|_| format!("axis: '{f}' is not a face index"));
+        g.axis = match self.axis.as_deref() {
+            None => None,
+            Some("edges") => Some(Reference::Edges),
+            Some(s) if s.starts_with("b:") => Some(Reference::FaceOfB(face(&s[2..])?)),
+            Some(s) if s.starts_with("a:") => Some(Reference::FaceOfA(face(&s[2..])?)),
+            Some(s) => return Err(format!("axis: '{s}' is not b:F, a:F or edges")),
         };
         let mut entry = CachedManifold {
             tangent: Vector::from_array(self.tangent),

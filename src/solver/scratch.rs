@@ -3,7 +3,7 @@
 //! from one step to the next (snapshots carry it).
 
 use crate::collision::contact::{Contact, Feature, Pair};
-use crate::collision::manifold::{MAX_POINTS, Manifold};
+use crate::collision::manifold::{MAX_POINTS, Manifold, Reference};
 use crate::math::{Mat3, Quat, Scalar, Vector};
 use crate::solver::{Batch, PointRows, SolverBody};
 
@@ -65,6 +65,9 @@ pub struct ContactAnchors {
     pub on_b: [Vector; MAX_POINTS],
     /// How many points.
     pub len: usize,
+    /// The axis the points were found along (its face, or an edge pair): next time the pair
+    /// is searched afresh, the search starts there (`manifold::contact_axis_from`).
+    pub axis: Option<Reference>,
 }
 
 /// A pair's cached state: its contact anchors and its impulses (points' and friction
