@@ -84,7 +84,11 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
     reach(ctx);
     let s = ctx.scratch.get_mut::<CullScratch>();
     let b = &ctx.bodies;
-    if !s.cache.holds(b, &s.reach) {
+    if s.cache.holds(b, &s.reach) {
+        if !s.cache.moved.is_empty() {
+            s.cache.reanchor(b, &s.reach);
+        }
+    } else {
         let reach = std::mem::take(&mut s.reach);
         if s.cache.rebuild_now() {
             let mut bound = std::mem::take(&mut s.cache.bound);
@@ -140,6 +144,9 @@ const SLACK: Scalar = 1e-9;
 /// Bodies whose widened reach is below this [m] always rebuild: squares of smaller lengths
 /// near the bottom of f64's range lose their relative precision.
 const TINY: Scalar = 1e-140;
+/// Most bodies anchored afresh in a step (each tested against every body) before the whole
+/// list is built again instead.
+const MAX_MOVED: usize = 16;
 /// Most plain grid steps in a row before a list is tried again, after lists that served one
 /// step only (box-gas, a rain while it falls).
 const MAX_BACKOFF: u32 = 32;
@@ -147,29 +154,30 @@ const MAX_BACKOFF: u32 = 32;
 /// A superset of the candidate pairs, kept from step to step: the grid's pairs for reaches
 /// widened by `MARGIN` at some step (the rebuild), filtered each later step by the exact test.
 ///
-/// Why the filter gives exactly the grid's list: say at the rebuild body i was at `X_i`
-/// with widened reach `W_i`, and today it is at `x_i`, `d_i = |x_i − X_i|` away, with reach
-/// `r_i`, and `d_i + r_i ≤ W_i·(1 − SLACK)` for every body (`holds`). If a pair passes
-/// today's test, `|x_i − x_j| ≤ r_i + r_j`, then by the triangle inequality
-/// `|X_i − X_j| ≤ |x_i − x_j| + d_i + d_j ≤ (W_i + W_j)·(1 − SLACK)`: it passed the rebuild's
-/// test with room to spare, so it is in the list. SLACK dwarfs the rounding of the two tests
-/// and of `d_i` (relative errors of a few ulps while no square leaves f64's normal range,
-/// which `TINY` ensures). The list is sorted, so the filtered one is in the grid's order. A
-/// pair of two bodies fixed at the rebuild was skipped there: a body that was fixed then
-/// (fixed or asleep) and is not now fails `holds`. Joined pairs are dropped after, as always.
+/// Why the filter gives exactly the grid's list: say body i was anchored (at the rebuild, or
+/// later by `reanchor`) at `X_i` with widened reach `W_i`, the list holds every pair whose
+/// spheres (X, W) overlap, and today body i is `d_i = |x_i − X_i|` away with reach `r_i`,
+/// `d_i + r_i ≤ W_i·(1 − SLACK)` (`holds`). If a pair passes today's test,
+/// `|x_i − x_j| ≤ r_i + r_j`, then by the triangle inequality
+/// `|X_i − X_j| ≤ |x_i − x_j| + d_i + d_j ≤ (W_i + W_j)·(1 − SLACK)`: its anchored spheres
+/// overlap with room to spare, so it is in the list. SLACK dwarfs the rounding of the two
+/// tests and of `d_i` (relative errors of a few ulps while no square leaves f64's normal
+/// range, which `TINY` ensures). The list is sorted, so the filtered one is in the grid's
+/// order. A pair of two bodies fixed at their anchoring is left out: a body fixed then (fixed
+/// or asleep) and free now is anchored afresh. Joined pairs are dropped after, as always.
 #[derive(Clone, Debug, Default)]
 pub struct PairCache {
     /// `pairs` is a list built as above and not yet broken.
     pub valid: bool,
     /// The superset, sorted by (a, b).
     pub pairs: Vec<(u32, u32)>,
-    /// Each body's centre at the rebuild [m].
+    /// Each body's centre at its anchoring [m].
     pub anchor: Vec<Vector>,
-    /// Each body's widened reach at the rebuild [m].
+    /// Each body's widened reach at its anchoring [m].
     pub bound: Vec<Scalar>,
     /// `bound·(1 − SLACK) − TINY`: the most `d_i + r_i` may be [m].
     pub limit: Vec<Scalar>,
-    /// Each body was fixed (or asleep) at the rebuild.
+    /// Each body was fixed (or asleep) at its anchoring.
     pub fixed: Vec<bool>,
     /// Steps the list has served, the rebuild's included.
     pub served: u32,
@@ -177,22 +185,84 @@ pub struct PairCache {
     pub skip: u32,
     /// The next `skip`: doubled each time a list serves one step only, up to `MAX_BACKOFF`.
     pub backoff: u32,
+    /// Scratch: the bodies outside their bounds this step.
+    pub moved: Vec<u32>,
+    /// Scratch: body i is in `moved`.
+    pub mark: Vec<bool>,
+    /// Scratch: the moved bodies' pairs, sorted.
+    pub fresh: Vec<(u32, u32)>,
+    /// Scratch: the merged list, swapped with `pairs`.
+    pub spare: Vec<(u32, u32)>,
 }
 
 impl PairCache {
-    /// The list still covers every candidate: same body count, every body within its bound,
-    /// none fixed at the rebuild and free now.
+    /// The list still covers every candidate once the bodies that left their bounds (at most
+    /// `MAX_MOVED`, listed in `moved`) are anchored afresh (`reanchor`): same body count, the
+    /// others within their bounds and none of them fixed at its anchoring and free now.
     fn holds(&mut self, b: &Bodies, reach: &[Scalar]) -> bool {
-        let ok = self.valid
-            && self.anchor.len() == b.len()
-            && (0..b.len()).all(|i| {
-                (!self.fixed[i] || b.is_fixed(i))
-                    && (b.position[i] - self.anchor[i]).length() + reach[i] <= self.limit[i]
-            });
-        if ok {
-            self.served += 1;
+        self.moved.clear();
+        if !self.valid || self.anchor.len() != b.len() {
+            return false;
         }
-        ok
+        for i in 0..b.len() {
+            let inside = (!self.fixed[i] || b.is_fixed(i))
+                && (b.position[i] - self.anchor[i]).length() + reach[i] <= self.limit[i];
+            if !inside {
+                if self.moved.len() == MAX_MOVED {
+                    return false;
+                }
+                self.moved.push(i as u32);
+            }
+        }
+        self.served += 1;
+        true
+    }
+
+    /// Anchors the `moved` bodies where they are now and replaces their pairs by the ones
+    /// their new bounds give, tested against every body's anchor: the list is then the one a
+    /// rebuild with these anchors would give, in the same order.
+    fn reanchor(&mut self, b: &Bodies, reach: &[Scalar]) {
+        self.mark.resize(b.len(), false);
+        for &k in &self.moved {
+            let k = k as usize;
+            self.anchor[k] = b.position[k];
+            self.bound[k] = reach[k] * (1.0 + MARGIN);
+            self.limit[k] = self.bound[k] * (1.0 - SLACK) - TINY;
+            self.fixed[k] = b.is_fixed(k);
+            self.mark[k] = true;
+        }
+        self.fresh.clear();
+        for &k in &self.moved {
+            let k = k as usize;
+            for j in 0..b.len() {
+                // A pair of two moved bodies once, from the lower.
+                let twice = self.mark[j] && j <= k;
+                if !twice
+                    && !(self.fixed[k] && self.fixed[j])
+                    && spheres_overlap(self.anchor[k], self.bound[k], self.anchor[j], self.bound[j])
+                {
+                    self.fresh.push((k.min(j) as u32, k.max(j) as u32));
+                }
+            }
+        }
+        self.fresh.sort_unstable();
+        let (old, mark) = (std::mem::take(&mut self.pairs), &self.mark);
+        let mut kept = old.iter().copied().filter(|&(a, c)| !mark[a as usize] && !mark[c as usize]).peekable();
+        let mut fresh = self.fresh.iter().copied().peekable();
+        self.spare.clear();
+        loop {
+            let next = match (kept.peek(), fresh.peek()) {
+                (Some(x), Some(y)) if x < y => kept.next(),
+                (Some(_), Some(_)) | (None, Some(_)) => fresh.next(),
+                (Some(_), None) => kept.next(),
+                (None, None) => break,
+            };
+            self.spare.extend(next);
+        }
+        self.pairs = std::mem::replace(&mut self.spare, old);
+        for &k in &self.moved {
+            self.mark[k as usize] = false;
+        }
     }
 
     /// Whether to rebuild the list on a step it does not hold, or run the plain grid: a list
@@ -431,6 +501,7 @@ mod tests {
     enum Way {
         Plain,
         Rebuilt,
+        Reanchored,
         Kept,
     }
 
@@ -438,6 +509,7 @@ mod tests {
         match ctx.scratch.get_mut::<CullScratch>().cache {
             PairCache { valid: false, .. } => Way::Plain,
             PairCache { served: 1, .. } => Way::Rebuilt,
+            PairCache { ref moved, .. } if !moved.is_empty() => Way::Reanchored,
             _ => Way::Kept,
         }
     }
@@ -510,11 +582,19 @@ mod tests {
         }
         assert_eq!(ways[0], Way::Rebuilt);
         assert!(ways[1..].iter().all(|&w| w == Way::Kept), "{ways:?}");
-        // One ball moves past its margin, towards a neighbour it did not touch: rebuilt.
+        // One ball moves past its margin, towards a neighbour it did not touch, then two.
         pos[20] += Vector::new(0.0, 0.0, 0.6);
-        assert_eq!(check(&mut sim, set(&pos)).0, Way::Rebuilt);
-        // Another at once: a list that served one step, so the plain grid for a while.
+        assert_eq!(check(&mut sim, set(&pos)).0, Way::Reanchored);
+        pos[20] += Vector::new(0.3, 0.0, 0.0);
         pos[30] += Vector::new(0.3, 0.0, 0.0);
+        assert_eq!(check(&mut sim, set(&pos)).0, Way::Reanchored);
+        assert_eq!(check(&mut sim, set(&pos)).0, Way::Kept);
+        // All move: rebuilt; and again at once: a list that served one step, so the plain
+        // grid for a while.
+        let shift = |pos: &mut Vec<Vector>| pos.iter_mut().skip(2).for_each(|x| *x += Vector::new(0.1, 0.0, 0.0));
+        shift(&mut pos);
+        assert_eq!(check(&mut sim, set(&pos)).0, Way::Rebuilt);
+        shift(&mut pos);
         assert_eq!(check(&mut sim, set(&pos)).0, Way::Plain);
         let mut later = Vec::new();
         for _ in 0..4 {
@@ -527,9 +607,8 @@ mod tests {
             b.position.copy_from_slice(&pos);
             b.inv_mass[1] = 1.0;
         });
-        assert_eq!(w, Way::Rebuilt);
+        assert_eq!(w, Way::Reanchored);
         assert!(pairs.contains(&(0, 1)));
-        assert_eq!(check(&mut sim, set(&pos)).0, Way::Kept);
         // A structural change: the kept list moved into a sim with more bodies, then into one
         // with the same count at other places.
         let scratch = std::mem::take(&mut sim.ctx.scratch);
@@ -540,7 +619,8 @@ mod tests {
         let scratch = std::mem::take(&mut bigger.ctx.scratch);
         let mut other = lattice(7);
         other.ctx.scratch = scratch;
-        assert_eq!(check(&mut other, |b| b.position.iter_mut().for_each(|x| *x *= 1.01)).0, Way::Rebuilt);
+        let moved = |b: &mut Bodies| b.position.iter_mut().for_each(|x| *x += Vector::new(0.0, 0.3, 0.0));
+        assert_eq!(check(&mut other, moved).0, Way::Rebuilt);
     }
 
     #[test]
@@ -562,7 +642,7 @@ mod tests {
             sim.step().expect("finite");
             ways.push(check_aside(&mut sim).0);
         }
-        for w in [Way::Plain, Way::Rebuilt, Way::Kept] {
+        for w in [Way::Plain, Way::Rebuilt, Way::Reanchored, Way::Kept] {
             assert!(ways.contains(&w), "{w:?} in {ways:?}");
         }
     }
