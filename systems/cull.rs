@@ -491,9 +491,10 @@ mod tests {
         assert!(spheres_overlap(Vector::ZERO, rod, Vector::new(0.9, 0.14, 0.0), 0.1 * r));
     }
 
-    use crate::Sim;
+    use crate::model::components::{Material, Pose, Velocity};
+    use crate::model::mesh::ConvexMesh;
     use crate::rng::SplitMix64;
-    use crate::scene::benchmarks::{BenchScene, scene_sim};
+    use crate::sim::{BodyDef, Sim};
     use proptest::prelude::*;
 
     /// Which way `cull` went on its last call.
@@ -532,19 +533,45 @@ mod tests {
         (w, grid)
     }
 
-    /// Balls of radius 0.5 on a 1 m lattice, touching their neighbours; the first two fixed.
-    fn lattice(nx: usize) -> Sim {
-        let mut actors = Vec::new();
-        for k in 0..nx * nx * 2 {
-            let (x, y, z) = (k % nx, k / nx % nx, k / (nx * nx));
-            let fixed = k < 2;
-            actors.push(format!(
-                "Actor(shape: Icosphere(radius: 0.5, subdivisions: 0), position: ({x}, {y}, {z}), fixed: {fixed})"
-            ));
+    /// A body: cube edge, centre, fixed.
+    type Cube = (Scalar, Vector, bool);
+
+    /// The default schedule over `cubes` (friction 0.5, no bounce), with gravity or without.
+    fn sim_of(cubes: &[Cube], gravity: bool) -> Sim {
+        let gravity = if gravity { Vector::new(0.0, -9.81, 0.0) } else { Vector::ZERO };
+        let params = crate::sim::context::Params { gravity, ..Default::default() };
+        let mut sim = Sim::new(1.0 / 60.0, params, crate::systems::default_schedule());
+        for (k, &(edge, at, fixed)) in cubes.iter().enumerate() {
+            let mesh = sim.add_mesh(ConvexMesh::cuboid(Vector::splat(edge)));
+            sim.spawn(&BodyDef {
+                name: format!("cube-{k}"),
+                mesh,
+                mass: edge.powi(3),
+                pose: Pose::from_position(at),
+                velocity: Velocity::default(),
+                material: Material { restitution: 0.0, friction: 0.5 },
+                fixed,
+            });
         }
-        let text = format!("Scene(actors: [{}])", actors.join(","));
-        let path = std::path::Path::new("inline.ron");
-        crate::scene::build(&crate::scene::parse(&text, path).expect("parses"), path).expect("builds")
+        sim
+    }
+
+    /// Cubes of bounding radius 0.5 on a 1 m lattice, touching their neighbours; the first
+    /// two fixed.
+    fn lattice(nx: usize) -> Sim {
+        let cubes: Vec<Cube> = (0..nx * nx * 2)
+            .map(|k| {
+                let (x, y, z) = (k % nx, k / nx % nx, k / (nx * nx));
+                (1.0 / 3f64.sqrt(), Vector::new(x as Scalar, y as Scalar, z as Scalar), k < 2)
+            })
+            .collect();
+        sim_of(&cubes, false)
+    }
+
+    /// A ground slab (a fixed 40 m cube whose top is at y = 0) and `cubes` above it.
+    fn on_ground(mut cubes: Vec<Cube>) -> Sim {
+        cubes.insert(0, (40.0, Vector::new(0.0, -20.0, 0.0), true));
+        sim_of(&cubes, true)
     }
 
     /// `check` on a copy of the cull's scratch, so the sim's own calls go on undisturbed: the
@@ -625,7 +652,14 @@ mod tests {
 
     #[test]
     fn a_settling_pyramid_keeps_its_list() {
-        let mut sim = scene_sim(BenchScene::Pyramid, 6, 1);
+        let mut cubes = Vec::new();
+        for row in 0..6 {
+            for j in 0..6 - row {
+                let x = j as Scalar - (5 - row) as Scalar * 0.5;
+                cubes.push((1.0, Vector::new(x, 0.5 + row as Scalar, 0.0), false));
+            }
+        }
+        let mut sim = on_ground(cubes);
         let mut ways = Vec::new();
         for _ in 0..80 {
             sim.step().expect("finite");
@@ -636,7 +670,14 @@ mod tests {
 
     #[test]
     fn a_rain_takes_every_way() {
-        let mut sim = scene_sim(BenchScene::Rain, 60, 1);
+        let mut rng = SplitMix64::new(3);
+        let cubes = (0..60)
+            .map(|k| {
+                let (x, z, y) = ((k % 4) as Scalar * 1.5, (k / 4 % 4) as Scalar * 1.5, 1.0 + (k / 16) as Scalar * 2.5);
+                (1.0, Vector::new(x + rng.uniform(-0.2, 0.2), y, z + rng.uniform(-0.2, 0.2)), false)
+            })
+            .collect();
+        let mut sim = on_ground(cubes);
         let mut ways = Vec::new();
         for _ in 0..200 {
             sim.step().expect("finite");
@@ -657,14 +698,11 @@ mod tests {
             step in 0.0..0.2f64,
         ) {
             let mut rng = SplitMix64::new(seed);
-            let actors: Vec<String> = (0..n).map(|_| {
-                let (x, y, z) = (rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0));
-                let (r, fixed) = (rng.uniform(0.1, 1.2), rng.unit() < 0.2);
-                format!("Actor(shape: Icosphere(radius: {r}, subdivisions: 0), position: ({x}, {y}, {z}), fixed: {fixed})")
+            let cubes: Vec<Cube> = (0..n).map(|_| {
+                let at = Vector::new(rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0));
+                (rng.uniform(0.1, 1.4), at, rng.unit() < 0.2)
             }).collect();
-            let text = format!("Scene(actors: [{}])", actors.join(","));
-            let path = std::path::Path::new("inline.ron");
-            let mut sim = crate::scene::build(&crate::scene::parse(&text, path).expect("parses"), path).expect("builds");
+            let mut sim = sim_of(&cubes, false);
             let mut pos = positions(&mut sim);
             for _ in 0..30 {
                 // Mostly tiny moves, now and then one past the margin; sometimes a fixed body wakes.
