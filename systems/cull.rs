@@ -63,6 +63,8 @@ const LARGE_RADIUS_FACTOR: Scalar = 4.0;
 /// The grid may have at most this many cells per ordinary body (memory bound for sparse
 /// scenes: the cell grows until it fits).
 const CELLS_PER_BODY: usize = 4;
+/// Relative widening of the grid's cells over the largest overlap distance (see `Grid::build`).
+const CELL_SLACK: Scalar = 1e-6;
 /// Most cells along one axis while the cell size is being found (any larger count is cut
 /// down by the size search anyway).
 const MAX_DIM: Scalar = (1u64 << 32) as Scalar;
@@ -147,8 +149,12 @@ const TINY: Scalar = 1e-140;
 /// Most bodies anchored afresh in a step (each tested against every body) before the whole
 /// list is built again instead.
 const MAX_MOVED: usize = 16;
-/// Most plain grid steps in a row before a list is tried again, after lists that served one
-/// step only (box-gas, a rain while it falls).
+/// A list that served fewer steps than this cost more than it saved (a rebuild costs about
+/// as much as three filtered steps save): the plain grid runs for a while (box-gas, a rain
+/// while it falls).
+const MIN_SERVED: u32 = 4;
+/// Most plain grid steps in a row before a list is tried again, after lists that served fewer
+/// than `MIN_SERVED` steps.
 const MAX_BACKOFF: u32 = 32;
 
 /// A superset of the candidate pairs, kept from step to step: the grid's pairs for reaches
@@ -183,7 +189,7 @@ pub struct PairCache {
     pub served: u32,
     /// Plain grid steps left before the next rebuild.
     pub skip: u32,
-    /// The next `skip`: doubled each time a list serves one step only, up to `MAX_BACKOFF`.
+    /// The next `skip`: doubled each time a list serves too few steps, up to `MAX_BACKOFF`.
     pub backoff: u32,
     /// Scratch: the bodies outside their bounds this step.
     pub moved: Vec<u32>,
@@ -265,10 +271,10 @@ impl PairCache {
         }
     }
 
-    /// Whether to rebuild the list on a step it does not hold, or run the plain grid: a list
-    /// that served one step only costs more than it saves, so the next few steps go without.
+    /// Whether to rebuild the list on a step it does not hold, or run the plain grid: after a
+    /// list that served fewer than `MIN_SERVED` steps the next few steps go without.
     fn rebuild_now(&mut self) -> bool {
-        if self.valid && self.served < 2 {
+        if self.valid && self.served < MIN_SERVED {
             self.skip = self.backoff.max(1);
             self.backoff = (2 * self.skip).min(MAX_BACKOFF);
         } else if self.valid {
@@ -344,8 +350,9 @@ impl Grid {
             count += 1;
         }
         // Two overlapping ordinary spheres have centres at most 2·r_max apart: with cells at
-        // least that wide, they sit in the same or neighbouring cells.
-        let mut cell = (2.0 * r_max).max(Scalar::MIN_POSITIVE);
+        // least that wide, they sit in the same or neighbouring cells. A hair wider, because
+        // rounding in `coords` can put centres exactly 2·r_max apart two cells apart.
+        let mut cell = (2.0 * r_max * (1.0 + CELL_SLACK)).max(Scalar::MIN_POSITIVE);
         let extent = if count == 0 { Vector::ZERO } else { hi - lo };
         // Capped before the cast: a scene 1e20 m across must not overflow the cell count.
         let dims_for = |cell: Scalar| (extent / cell).to_array().map(|e| e.floor().min(MAX_DIM) as usize + 1);
@@ -642,12 +649,24 @@ mod tests {
         let mut bigger = lattice(7);
         bigger.ctx.scratch = scratch;
         assert_eq!(check(&mut bigger, |_| {}).0, Way::Rebuilt);
-        assert_eq!(check(&mut bigger, |_| {}).0, Way::Kept);
+        for _ in 1..MIN_SERVED {
+            assert_eq!(check(&mut bigger, |_| {}).0, Way::Kept);
+        }
         let scratch = std::mem::take(&mut bigger.ctx.scratch);
         let mut other = lattice(7);
         other.ctx.scratch = scratch;
         let moved = |b: &mut Bodies| b.position.iter_mut().for_each(|x| *x += Vector::new(0.0, 0.3, 0.0));
         assert_eq!(check(&mut other, moved).0, Way::Rebuilt);
+    }
+
+    #[test]
+    fn plain_grid_finds_exactly_touching_pairs_off_the_origin() {
+        // Centres y = j + 0.3 exactly 1 m apart: (2.3 − 0.3) rounds below 2, (3.3 − 0.3) to 3,
+        // so with cells exactly 1 m wide the two rows were not neighbours.
+        let mut sim = lattice(7);
+        sim.ctx.scratch.get_mut::<CullScratch>().cache.skip = 5;
+        let shifted = |b: &mut Bodies| b.position.iter_mut().for_each(|x| *x += Vector::new(0.0, 0.3, 0.0));
+        assert_eq!(check(&mut sim, shifted).0, Way::Plain);
     }
 
     #[test]
