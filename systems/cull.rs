@@ -210,9 +210,9 @@ impl PairCache {
         if !self.valid || self.anchor.len() != b.len() {
             return false;
         }
-        for i in 0..b.len() {
-            let inside = (!self.fixed[i] || b.is_fixed(i))
-                && (b.position[i] - self.anchor[i]).length() + reach[i] <= self.limit[i];
+        for (i, &r) in reach.iter().enumerate() {
+            let inside =
+                (!self.fixed[i] || b.is_fixed(i)) && (b.position[i] - self.anchor[i]).length() + r <= self.limit[i];
             if !inside {
                 if self.moved.len() == MAX_MOVED {
                     return false;
@@ -241,12 +241,9 @@ impl PairCache {
         for &k in &self.moved {
             let k = k as usize;
             for j in 0..b.len() {
-                // A pair of two moved bodies once, from the lower.
-                let twice = self.mark[j] && j <= k;
-                if !twice
-                    && !(self.fixed[k] && self.fixed[j])
-                    && spheres_overlap(self.anchor[k], self.bound[k], self.anchor[j], self.bound[j])
-                {
+                // A pair of two moved bodies once, from the lower; none of two fixed ones.
+                let skip = (self.mark[j] && j <= k) || (self.fixed[k] && self.fixed[j]);
+                if !skip && spheres_overlap(self.anchor[k], self.bound[k], self.anchor[j], self.bound[j]) {
                     self.fresh.push((k.min(j) as u32, k.max(j) as u32));
                 }
             }
