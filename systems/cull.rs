@@ -5,6 +5,7 @@
 
 use crate::collision::contact::Pair;
 use crate::math::{Scalar, Vector};
+use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
 use crate::solver::Joints;
 use hecs::World;
@@ -62,6 +63,8 @@ const LARGE_RADIUS_FACTOR: Scalar = 4.0;
 /// The grid may have at most this many cells per ordinary body (memory bound for sparse
 /// scenes: the cell grows until it fits).
 const CELLS_PER_BODY: usize = 4;
+/// Relative widening of the grid's cells over the largest overlap distance (see `Grid::build`).
+const CELL_SLACK: Scalar = 1e-6;
 /// Most cells along one axis while the cell size is being found (any larger count is cut
 /// down by the size search anyway).
 const MAX_DIM: Scalar = (1u64 << 32) as Scalar;
@@ -71,22 +74,53 @@ const MAX_DIM: Scalar = (1u64 << 32) as Scalar;
 const CHUNK: usize = 256;
 
 /// Uniform-grid broad phase, the default: the same pairs, in the same order, as
-/// `cull_all_pairs`.
+/// `cull_all_pairs`. While bodies barely move it filters a kept list instead of rebuilding
+/// the grid (`PairCache`).
 ///
 /// - Reads: `ctx.bodies`, the joints. Writes: `ctx.pairs`, `ctx.stats`, its `CullScratch`.
 /// - Paper: bounding box check (its all-pairs loop replaced; ARCHITECTURE.md says why a grid and
 ///   not sweep-and-prune: box-gas's slabs of equal cubes overlap on any one axis).
-/// - Cost: O(N) to bin, O(N·k) for k neighbours per body, plus O(N·L) for L large bodies.
+/// - Cost: O(N) to bin, O(N·k) for k neighbours per body, plus O(N·L) for L large bodies; on a
+///   step the kept list still holds, O(N) plus its length.
 pub fn cull(_world: &mut World, ctx: &mut StepContext) {
-    let n = ctx.bodies.len();
     reach(ctx);
     let s = ctx.scratch.get_mut::<CullScratch>();
     let b = &ctx.bodies;
-    let reach = std::mem::take(&mut s.reach);
-    let threshold = large_threshold(&reach, &mut s.radii);
+    if s.cache.holds(b, &s.reach) {
+        if !s.cache.moved.is_empty() {
+            s.cache.reanchor(b, &s.reach);
+        }
+    } else {
+        let reach = std::mem::take(&mut s.reach);
+        if s.cache.rebuild_now() {
+            let mut bound = std::mem::take(&mut s.cache.bound);
+            bound.clear();
+            bound.extend(reach.iter().map(|r| r * (1.0 + MARGIN)));
+            let chunks = grid_pairs(b, &bound, s);
+            s.cache.rebuilt(b, bound, &s.chunks[..chunks]);
+        } else {
+            let chunks = grid_pairs(b, &reach, s);
+            for chunk in &s.chunks[..chunks] {
+                ctx.pairs.extend(chunk.iter().map(|&(a, b)| Pair::candidate(a, b)));
+            }
+        }
+        s.reach = reach;
+    }
+    if s.cache.valid {
+        s.cache.filter(b, &s.reach, &mut ctx.pairs);
+    }
+    drop_jointed(ctx);
+    ctx.stats.candidates = ctx.pairs.len();
+}
+
+/// The grid search: every pair (a < b, not both fixed) whose spheres of radius `reach`
+/// overlap, sorted, into `s.chunks[..count]` (concatenated in order); returns the count.
+fn grid_pairs(b: &Bodies, reach: &[Scalar], s: &mut CullScratch) -> usize {
+    let n = b.len();
+    let threshold = large_threshold(reach, &mut s.radii);
     s.large.clear();
     s.large.extend((0..n as u32).filter(|&i| reach[i as usize] > threshold));
-    let grid = Grid::build(b, &reach, threshold, s);
+    let grid = Grid::build(b, reach, threshold, s);
     let chunks = n.div_ceil(CHUNK);
     if s.chunks.len() < chunks {
         s.chunks.resize_with(chunks, Vec::new);
@@ -96,16 +130,187 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
         out.clear();
         for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
             let first = out.len();
-            grid.pairs_of(i, b, &reach, (cell_start, order), large, out);
+            grid.pairs_of(i, b, reach, (cell_start, order), large, out);
             out[first..].sort_unstable_by_key(|&(_, b)| b);
         }
     });
-    for chunk in &s.chunks[..chunks] {
-        ctx.pairs.extend(chunk.iter().map(|&(a, b)| Pair::candidate(a, b)));
+    chunks
+}
+
+/// A kept list's reaches are today's widened by this fraction: room for each body to move
+/// before the list must be built again.
+const MARGIN: Scalar = 0.1;
+/// Relative room left for rounding in the two sphere tests and the distance moved (each a
+/// few ulps, about 1e-15): see `PairCache`.
+const SLACK: Scalar = 1e-9;
+/// Bodies whose widened reach is below this [m] always rebuild: squares of smaller lengths
+/// near the bottom of f64's range lose their relative precision.
+const TINY: Scalar = 1e-140;
+/// Most bodies anchored afresh in a step (each tested against every body) before the whole
+/// list is built again instead.
+const MAX_MOVED: usize = 16;
+/// A list that served fewer steps than this cost more than it saved (a rebuild costs about
+/// as much as three filtered steps save): the plain grid runs for a while (box-gas, a rain
+/// while it falls).
+const MIN_SERVED: u32 = 4;
+/// Most plain grid steps in a row before a list is tried again, after lists that served fewer
+/// than `MIN_SERVED` steps.
+const MAX_BACKOFF: u32 = 32;
+
+/// A superset of the candidate pairs, kept from step to step: the grid's pairs for reaches
+/// widened by `MARGIN` at some step (the rebuild), filtered each later step by the exact test.
+///
+/// Why the filter gives exactly the grid's list: say body i was anchored (at the rebuild, or
+/// later by `reanchor`) at `X_i` with widened reach `W_i`, the list holds every pair whose
+/// spheres (X, W) overlap, and today body i is `d_i = |x_i − X_i|` away with reach `r_i`,
+/// `d_i + r_i ≤ W_i·(1 − SLACK)` (`holds`). If a pair passes today's test,
+/// `|x_i − x_j| ≤ r_i + r_j`, then by the triangle inequality
+/// `|X_i − X_j| ≤ |x_i − x_j| + d_i + d_j ≤ (W_i + W_j)·(1 − SLACK)`: its anchored spheres
+/// overlap with room to spare, so it is in the list. SLACK dwarfs the rounding of the two
+/// tests and of `d_i` (relative errors of a few ulps while no square leaves f64's normal
+/// range, which `TINY` ensures). The list is sorted, so the filtered one is in the grid's
+/// order. A pair of two bodies fixed at their anchoring is left out: a body fixed then (fixed
+/// or asleep) and free now is anchored afresh. Joined pairs are dropped after, as always.
+#[derive(Clone, Debug, Default)]
+pub struct PairCache {
+    /// `pairs` is a list built as above and not yet broken.
+    pub valid: bool,
+    /// The superset, sorted by (a, b).
+    pub pairs: Vec<(u32, u32)>,
+    /// Each body's centre at its anchoring [m].
+    pub anchor: Vec<Vector>,
+    /// Each body's widened reach at its anchoring [m].
+    pub bound: Vec<Scalar>,
+    /// `bound·(1 − SLACK) − TINY`: the most `d_i + r_i` may be [m].
+    pub limit: Vec<Scalar>,
+    /// Each body was fixed (or asleep) at its anchoring.
+    pub fixed: Vec<bool>,
+    /// Steps the list has served, the rebuild's included.
+    pub served: u32,
+    /// Plain grid steps left before the next rebuild.
+    pub skip: u32,
+    /// The next `skip`: doubled each time a list serves too few steps, up to `MAX_BACKOFF`.
+    pub backoff: u32,
+    /// Scratch: the bodies outside their bounds this step.
+    pub moved: Vec<u32>,
+    /// Scratch: body i is in `moved`.
+    pub mark: Vec<bool>,
+    /// Scratch: the moved bodies' pairs, sorted.
+    pub fresh: Vec<(u32, u32)>,
+    /// Scratch: the merged list, swapped with `pairs`.
+    pub spare: Vec<(u32, u32)>,
+}
+
+impl PairCache {
+    /// The list still covers every candidate once the bodies that left their bounds (at most
+    /// `MAX_MOVED`, listed in `moved`) are anchored afresh (`reanchor`): same body count, the
+    /// others within their bounds and none of them fixed at its anchoring and free now.
+    fn holds(&mut self, b: &Bodies, reach: &[Scalar]) -> bool {
+        self.moved.clear();
+        if !self.valid || self.anchor.len() != b.len() {
+            return false;
+        }
+        for (i, &r) in reach.iter().enumerate() {
+            let inside =
+                (!self.fixed[i] || b.is_fixed(i)) && (b.position[i] - self.anchor[i]).length() + r <= self.limit[i];
+            if !inside {
+                if self.moved.len() == MAX_MOVED {
+                    return false;
+                }
+                self.moved.push(i as u32);
+            }
+        }
+        self.served += 1;
+        true
     }
-    s.reach = reach;
-    drop_jointed(ctx);
-    ctx.stats.candidates = ctx.pairs.len();
+
+    /// Anchors the `moved` bodies where they are now and replaces their pairs by the ones
+    /// their new bounds give, tested against every body's anchor: the list is then the one a
+    /// rebuild with these anchors would give, in the same order.
+    fn reanchor(&mut self, b: &Bodies, reach: &[Scalar]) {
+        self.mark.resize(b.len(), false);
+        for &k in &self.moved {
+            let k = k as usize;
+            self.anchor[k] = b.position[k];
+            self.bound[k] = reach[k] * (1.0 + MARGIN);
+            self.limit[k] = self.bound[k] * (1.0 - SLACK) - TINY;
+            self.fixed[k] = b.is_fixed(k);
+            self.mark[k] = true;
+        }
+        self.fresh.clear();
+        for &k in &self.moved {
+            let k = k as usize;
+            for j in 0..b.len() {
+                // A pair of two moved bodies once, from the lower; none of two fixed ones.
+                let skip = (self.mark[j] && j <= k) || (self.fixed[k] && self.fixed[j]);
+                if !skip && spheres_overlap(self.anchor[k], self.bound[k], self.anchor[j], self.bound[j]) {
+                    self.fresh.push((k.min(j) as u32, k.max(j) as u32));
+                }
+            }
+        }
+        self.fresh.sort_unstable();
+        let (old, mark) = (std::mem::take(&mut self.pairs), &self.mark);
+        let mut kept = old.iter().copied().filter(|&(a, c)| !mark[a as usize] && !mark[c as usize]).peekable();
+        let mut fresh = self.fresh.iter().copied().peekable();
+        self.spare.clear();
+        loop {
+            let next = match (kept.peek(), fresh.peek()) {
+                (Some(x), Some(y)) if x < y => kept.next(),
+                (Some(_), Some(_)) | (None, Some(_)) => fresh.next(),
+                (Some(_), None) => kept.next(),
+                (None, None) => break,
+            };
+            self.spare.extend(next);
+        }
+        self.pairs = std::mem::replace(&mut self.spare, old);
+        for &k in &self.moved {
+            self.mark[k as usize] = false;
+        }
+    }
+
+    /// Whether to rebuild the list on a step it does not hold, or run the plain grid: after a
+    /// list that served fewer than `MIN_SERVED` steps the next few steps go without.
+    fn rebuild_now(&mut self) -> bool {
+        if self.valid && self.served < MIN_SERVED {
+            self.skip = self.backoff.max(1);
+            self.backoff = (2 * self.skip).min(MAX_BACKOFF);
+        } else if self.valid {
+            self.backoff = 1;
+        }
+        self.valid = false;
+        if self.skip > 0 {
+            self.skip -= 1;
+            return false;
+        }
+        true
+    }
+
+    /// Keeps the grid's pairs for the widened reaches `bound`, and what they assumed.
+    fn rebuilt(&mut self, b: &Bodies, bound: Vec<Scalar>, chunks: &[Vec<(u32, u32)>]) {
+        self.pairs.clear();
+        for chunk in chunks {
+            self.pairs.extend_from_slice(chunk);
+        }
+        self.anchor.clear();
+        self.anchor.extend_from_slice(&b.position);
+        self.limit.clear();
+        self.limit.extend(bound.iter().map(|w| w * (1.0 - SLACK) - TINY));
+        self.fixed.clear();
+        self.fixed.extend((0..b.len()).map(|i| b.is_fixed(i)));
+        self.bound = bound;
+        self.valid = true;
+        self.served = 1;
+    }
+
+    /// Appends the kept pairs that pass `cull_all_pairs`'s test today.
+    fn filter(&self, b: &Bodies, reach: &[Scalar], out: &mut Vec<Pair>) {
+        for &(i, j) in &self.pairs {
+            let (a, c) = (i as usize, j as usize);
+            if !(b.is_fixed(a) && b.is_fixed(c)) && spheres_overlap(b.position[a], reach[a], b.position[c], reach[c]) {
+                out.push(Pair::candidate(i, j));
+            }
+        }
+    }
 }
 
 /// `LARGE_RADIUS_FACTOR` × the median radius (∞ when there are no bodies).
@@ -130,7 +335,7 @@ struct Grid {
 }
 
 impl Grid {
-    fn build(b: &crate::sim::bodies::Bodies, radius: &[Scalar], threshold: Scalar, s: &mut CullScratch) -> Self {
+    fn build(b: &Bodies, radius: &[Scalar], threshold: Scalar, s: &mut CullScratch) -> Self {
         let ordinary = || (0..b.len()).filter(|&i| radius[i] <= threshold);
         let (mut lo, mut hi, mut r_max) =
             (Vector::splat(Scalar::INFINITY), Vector::splat(Scalar::NEG_INFINITY), 0.0_f64);
@@ -142,8 +347,9 @@ impl Grid {
             count += 1;
         }
         // Two overlapping ordinary spheres have centres at most 2·r_max apart: with cells at
-        // least that wide, they sit in the same or neighbouring cells.
-        let mut cell = (2.0 * r_max).max(Scalar::MIN_POSITIVE);
+        // least that wide, they sit in the same or neighbouring cells. A hair wider, because
+        // rounding in `coords` can put centres exactly 2·r_max apart two cells apart.
+        let mut cell = (2.0 * r_max * (1.0 + CELL_SLACK)).max(Scalar::MIN_POSITIVE);
         let extent = if count == 0 { Vector::ZERO } else { hi - lo };
         // Capped before the cast: a scene 1e20 m across must not overflow the cell count.
         let dims_for = |cell: Scalar| (extent / cell).to_array().map(|e| e.floor().min(MAX_DIM) as usize + 1);
@@ -198,7 +404,7 @@ impl Grid {
     fn pairs_of(
         &self,
         i: usize,
-        b: &crate::sim::bodies::Bodies,
+        b: &Bodies,
         radius: &[Scalar],
         (start, order): (&[u32], &[CellEntry]),
         large: &[u32],
@@ -269,6 +475,8 @@ pub struct CullScratch {
     /// Pairs (a, b) found per chunk of bodies, concatenated in order; 8 bytes each, not a
     /// whole `Pair`, because at 64 000 cubes they are 270 000 and memory traffic dominates.
     pub chunks: Vec<Vec<(u32, u32)>>,
+    /// The pairs kept from step to step while bodies barely move.
+    pub cache: PairCache,
 }
 
 #[cfg(test)]
@@ -285,5 +493,247 @@ mod tests {
         // both readings of the paper's check miss (E1).
         let rod = (1.0f64 + 0.01 + 0.01).sqrt();
         assert!(spheres_overlap(Vector::ZERO, rod, Vector::new(0.9, 0.14, 0.0), 0.1 * r));
+    }
+
+    use crate::model::components::{Material, Pose, Velocity};
+    use crate::model::mesh::ConvexMesh;
+    use crate::rng::SplitMix64;
+    use crate::sim::{BodyDef, Sim};
+    use proptest::prelude::*;
+
+    /// Which way `cull` went on its last call.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    enum Way {
+        Plain,
+        Rebuilt,
+        Reanchored,
+        Kept,
+    }
+
+    fn way(ctx: &mut StepContext) -> Way {
+        match ctx.scratch.get_mut::<CullScratch>().cache {
+            PairCache { valid: false, .. } => Way::Plain,
+            PairCache { served: 1, .. } => Way::Rebuilt,
+            PairCache { ref moved, .. } if !moved.is_empty() => Way::Reanchored,
+            _ => Way::Kept,
+        }
+    }
+
+    fn listed(ctx: &StepContext) -> Vec<(u32, u32)> {
+        ctx.pairs.iter().map(|p| (p.a, p.b)).collect()
+    }
+
+    /// Snapshots the sim, lets `edit` change the bodies, and asserts that `cull` and
+    /// `cull_all_pairs` list the same pairs; returns `cull`'s way and the list.
+    fn check(sim: &mut Sim, edit: impl FnOnce(&mut Bodies)) -> (Way, Vec<(u32, u32)>) {
+        sim.ctx.begin_step(&sim.world);
+        sim.ctx.step -= 1; // no step is taken
+        edit(&mut sim.ctx.bodies);
+        cull(&mut sim.world, &mut sim.ctx);
+        let (grid, w) = (listed(&sim.ctx), way(&mut sim.ctx));
+        sim.ctx.pairs.clear();
+        cull_all_pairs(&mut sim.world, &mut sim.ctx);
+        assert_eq!(grid, listed(&sim.ctx), "{w:?}");
+        (w, grid)
+    }
+
+    /// A body: cube edge, centre, fixed.
+    type Cube = (Scalar, Vector, bool);
+
+    /// The default schedule over `cubes` (friction 0.5, no bounce), with gravity or without.
+    fn sim_of(cubes: &[Cube], gravity: bool) -> Sim {
+        let gravity = if gravity { Vector::new(0.0, -9.81, 0.0) } else { Vector::ZERO };
+        let params = crate::sim::context::Params { gravity, ..Default::default() };
+        let mut sim = Sim::new(1.0 / 60.0, params, crate::systems::default_schedule());
+        for (k, &(edge, at, fixed)) in cubes.iter().enumerate() {
+            let mesh = sim.add_mesh(ConvexMesh::cuboid(Vector::splat(edge)));
+            sim.spawn(&BodyDef {
+                name: format!("cube-{k}"),
+                mesh,
+                mass: edge.powi(3),
+                pose: Pose::from_position(at),
+                velocity: Velocity::default(),
+                material: Material { restitution: 0.0, friction: 0.5 },
+                fixed,
+            });
+        }
+        sim
+    }
+
+    /// Cubes of bounding radius 0.5 on a 1 m lattice, touching their neighbours; the first
+    /// two fixed.
+    fn lattice(nx: usize) -> Sim {
+        let cubes: Vec<Cube> = (0..nx * nx * 2)
+            .map(|k| {
+                let (x, y, z) = (k % nx, k / nx % nx, k / (nx * nx));
+                (1.0 / 3f64.sqrt(), Vector::new(x as Scalar, y as Scalar, z as Scalar), k < 2)
+            })
+            .collect();
+        sim_of(&cubes, false)
+    }
+
+    /// A ground slab (a fixed 40 m cube whose top is at y = 0) and `cubes` above it.
+    fn on_ground(mut cubes: Vec<Cube>) -> Sim {
+        cubes.insert(0, (40.0, Vector::new(0.0, -20.0, 0.0), true));
+        sim_of(&cubes, true)
+    }
+
+    /// `check` on a copy of the cull's scratch, so the sim's own calls go on undisturbed: the
+    /// way returned is the one the sim's next step takes.
+    fn check_aside(sim: &mut Sim) -> (Way, Vec<(u32, u32)>) {
+        let kept = sim.ctx.scratch.get_mut::<CullScratch>().clone();
+        let out = check(sim, |_| {});
+        *sim.ctx.scratch.get_mut::<CullScratch>() = kept;
+        out
+    }
+
+    fn positions(sim: &mut Sim) -> Vec<Vector> {
+        sim.ctx.begin_step(&sim.world);
+        sim.ctx.step -= 1;
+        sim.ctx.bodies.position.clone()
+    }
+
+    fn set(pos: &[Vector]) -> impl FnOnce(&mut Bodies) + '_ {
+        |b| b.position.copy_from_slice(pos)
+    }
+
+    #[test]
+    fn kept_list_equals_all_pairs_through_every_way() {
+        let mut sim = lattice(6);
+        let mut pos = positions(&mut sim);
+        let r = sim.ctx.bodies.radius[5];
+        let mut rng = SplitMix64::new(7);
+        let mut ways = Vec::new();
+        // Small random walks: the kept list serves, pairs of touching balls come and go.
+        for _ in 0..12 {
+            for x in pos.iter_mut().skip(2) {
+                *x += Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)) * 0.002 * r;
+            }
+            ways.push(check(&mut sim, set(&pos)).0);
+        }
+        assert_eq!(ways[0], Way::Rebuilt);
+        assert!(ways[1..].iter().all(|&w| w == Way::Kept), "{ways:?}");
+        // One ball moves past its margin, towards a neighbour it did not touch, then two.
+        pos[20] += Vector::new(0.0, 0.0, 0.6);
+        assert_eq!(check(&mut sim, set(&pos)).0, Way::Reanchored);
+        pos[20] += Vector::new(0.3, 0.0, 0.0);
+        pos[30] += Vector::new(0.3, 0.0, 0.0);
+        assert_eq!(check(&mut sim, set(&pos)).0, Way::Reanchored);
+        assert_eq!(check(&mut sim, set(&pos)).0, Way::Kept);
+        // All move: rebuilt; and again at once: a list that served one step, so the plain
+        // grid for a while.
+        let shift = |pos: &mut Vec<Vector>| pos.iter_mut().skip(2).for_each(|x| *x += Vector::new(0.1, 0.0, 0.0));
+        shift(&mut pos);
+        assert_eq!(check(&mut sim, set(&pos)).0, Way::Rebuilt);
+        shift(&mut pos);
+        assert_eq!(check(&mut sim, set(&pos)).0, Way::Plain);
+        let mut later = Vec::new();
+        for _ in 0..4 {
+            later.push(check(&mut sim, set(&pos)).0);
+        }
+        assert_eq!(later, [Way::Rebuilt, Way::Kept, Way::Kept, Way::Kept]);
+        // The two fixed balls touch but are no pair; one of them freed (woken) must be.
+        assert!(!check(&mut sim, set(&pos)).1.contains(&(0, 1)));
+        let (w, pairs) = check(&mut sim, |b| {
+            b.position.copy_from_slice(&pos);
+            b.inv_mass[1] = 1.0;
+        });
+        assert_eq!(w, Way::Reanchored);
+        assert!(pairs.contains(&(0, 1)));
+        // A structural change: the kept list moved into a sim with more bodies, then into one
+        // with the same count at other places.
+        let scratch = std::mem::take(&mut sim.ctx.scratch);
+        let mut bigger = lattice(7);
+        bigger.ctx.scratch = scratch;
+        assert_eq!(check(&mut bigger, |_| {}).0, Way::Rebuilt);
+        for _ in 1..MIN_SERVED {
+            assert_eq!(check(&mut bigger, |_| {}).0, Way::Kept);
+        }
+        let scratch = std::mem::take(&mut bigger.ctx.scratch);
+        let mut other = lattice(7);
+        other.ctx.scratch = scratch;
+        let moved = |b: &mut Bodies| b.position.iter_mut().for_each(|x| *x += Vector::new(0.0, 0.3, 0.0));
+        assert_eq!(check(&mut other, moved).0, Way::Rebuilt);
+    }
+
+    #[test]
+    fn plain_grid_finds_exactly_touching_pairs_off_the_origin() {
+        // Centres y = j + 0.3 exactly 1 m apart: (2.3 − 0.3) rounds below 2, (3.3 − 0.3) to 3,
+        // so with cells exactly 1 m wide the two rows were not neighbours.
+        let mut sim = lattice(7);
+        sim.ctx.scratch.get_mut::<CullScratch>().cache.skip = 5;
+        let shifted = |b: &mut Bodies| b.position.iter_mut().for_each(|x| *x += Vector::new(0.0, 0.3, 0.0));
+        assert_eq!(check(&mut sim, shifted).0, Way::Plain);
+    }
+
+    #[test]
+    fn a_settling_pyramid_keeps_its_list() {
+        let mut cubes = Vec::new();
+        for row in 0..6 {
+            for j in 0..6 - row {
+                let x = j as Scalar - (5 - row) as Scalar * 0.5;
+                cubes.push((1.0, Vector::new(x, 0.5 + row as Scalar, 0.0), false));
+            }
+        }
+        let mut sim = on_ground(cubes);
+        let mut ways = Vec::new();
+        for _ in 0..80 {
+            sim.step().expect("finite");
+            ways.push(check_aside(&mut sim).0);
+        }
+        assert!(ways.iter().filter(|&&w| w == Way::Kept).count() > 60, "{ways:?}");
+    }
+
+    #[test]
+    fn a_rain_takes_every_way() {
+        let mut rng = SplitMix64::new(3);
+        let cubes = (0..60)
+            .map(|k| {
+                let (x, z, y) = ((k % 4) as Scalar * 1.5, (k / 4 % 4) as Scalar * 1.5, 1.0 + (k / 16) as Scalar * 2.5);
+                (1.0, Vector::new(x + rng.uniform(-0.2, 0.2), y, z + rng.uniform(-0.2, 0.2)), false)
+            })
+            .collect();
+        let mut sim = on_ground(cubes);
+        let mut ways = Vec::new();
+        for _ in 0..200 {
+            sim.step().expect("finite");
+            ways.push(check_aside(&mut sim).0);
+        }
+        for w in [Way::Plain, Way::Rebuilt, Way::Reanchored, Way::Kept] {
+            assert!(ways.contains(&w), "{w:?} in {ways:?}");
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        #[test]
+        fn kept_list_equals_all_pairs_on_random_walks(
+            seed in any::<u64>(),
+            n in 2usize..60,
+            step in 0.0..0.2f64,
+        ) {
+            let mut rng = SplitMix64::new(seed);
+            let cubes: Vec<Cube> = (0..n).map(|_| {
+                let at = Vector::new(rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0));
+                (rng.uniform(0.1, 1.4), at, rng.unit() < 0.2)
+            }).collect();
+            let mut sim = sim_of(&cubes, false);
+            let mut pos = positions(&mut sim);
+            for _ in 0..30 {
+                // Mostly tiny moves, now and then one past the margin; sometimes a fixed body wakes.
+                let scale = if rng.unit() < 0.1 { step * 5.0 } else { step * 0.05 };
+                for x in &mut pos {
+                    *x += Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)) * scale;
+                }
+                let wake = (rng.unit() < 0.1).then(|| rng.next_u64() as usize % n);
+                check(&mut sim, |b| {
+                    b.position.copy_from_slice(&pos);
+                    if let Some(i) = wake {
+                        b.inv_mass[i] = 1.0;
+                    }
+                });
+            }
+        }
     }
 }
