@@ -7,102 +7,10 @@
 //! own selected; idle lanes and points get the idle values (mostly +0: an AND with the mask).
 
 use super::lanes::{Batch, LaneVectors, Lanes, PointRows};
+use super::regs::{M, Reg, V, keep};
 use super::{Constraint, LANES};
 use crate::collision::manifold::MAX_POINTS;
 use crate::math::Scalar;
-use wide::f64x4;
-
-/// Four f64 lanes in one register.
-type Reg = f64x4;
-
-/// One vector per lane, a register per component.
-#[derive(Clone, Copy)]
-struct V {
-    x: Reg,
-    y: Reg,
-    z: Reg,
-}
-
-impl V {
-    #[inline(always)]
-    fn load(v: &LaneVectors) -> Self {
-        Self { x: Reg::new(v.x), y: Reg::new(v.y), z: Reg::new(v.z) }
-    }
-
-    #[inline(always)]
-    fn splat(x: Scalar, y: Scalar, z: Scalar) -> Self {
-        Self { x: Reg::splat(x), y: Reg::splat(y), z: Reg::splat(z) }
-    }
-
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        Self { x: self.x + o.x, y: self.y + o.y, z: self.z + o.z }
-    }
-
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        Self { x: self.x - o.x, y: self.y - o.y, z: self.z - o.z }
-    }
-
-    /// Each component times `s` (glam's `DVec3 * f64`).
-    #[inline(always)]
-    fn scale(self, s: Reg) -> Self {
-        Self { x: self.x * s, y: self.y * s, z: self.z * s }
-    }
-
-    /// Each component over `s` (glam's `DVec3 / f64`).
-    #[inline(always)]
-    fn over(self, s: Reg) -> Self {
-        Self { x: self.x / s, y: self.y / s, z: self.z / s }
-    }
-
-    /// glam's `dot`: x, y, z summed in that order.
-    #[inline(always)]
-    fn dot(self, o: Self) -> Reg {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-
-    /// glam's `cross`.
-    #[inline(always)]
-    fn cross(self, o: Self) -> Self {
-        Self { x: self.y * o.z - o.y * self.z, y: self.z * o.x - o.z * self.x, z: self.x * o.y - o.x * self.y }
-    }
-
-    /// Per lane `self` where `mask` holds, else +0.
-    #[inline(always)]
-    fn keep(self, mask: Reg) -> Self {
-        Self { x: keep(mask, self.x), y: keep(mask, self.y), z: keep(mask, self.z) }
-    }
-
-    /// Per lane `self` where `mask` holds, else `other`.
-    #[inline(always)]
-    fn select(self, mask: Reg, other: Self) -> Self {
-        Self { x: mask.select(self.x, other.x), y: mask.select(self.y, other.y), z: mask.select(self.z, other.z) }
-    }
-
-    #[inline(always)]
-    fn store(self, into: &mut LaneVectors) {
-        (into.x, into.y, into.z) = (self.x.to_array(), self.y.to_array(), self.z.to_array());
-    }
-}
-
-/// A 3×3 matrix per lane, by columns (glam's `DMat3` axes).
-#[derive(Clone, Copy)]
-struct M([V; 3]);
-
-impl M {
-    /// glam's `mul_vec3`: the columns scaled and added, first to last.
-    #[inline(always)]
-    fn mul(&self, v: V) -> V {
-        self.0[0].scale(v.x).add(self.0[1].scale(v.y)).add(self.0[2].scale(v.z))
-    }
-}
-
-/// `x` where `mask` holds, else +0 (the idle value of most fields): one AND, not a blend.
-#[inline(always)]
-fn keep(mask: Reg, x: Reg) -> Reg {
-    x & mask
-}
 
 /// `constraints::inverse` per lane: 1/k, or 0 where k ≤ 0.
 #[inline(always)]

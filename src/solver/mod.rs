@@ -39,6 +39,7 @@ mod lanes;
 mod recycle;
 #[cfg(test)]
 mod reference;
+mod regs;
 mod scratch;
 
 pub(crate) use constraints::build_constraints;

@@ -4,87 +4,11 @@
 //! one-pair code's (glam's matrix, quaternion and dot products), operation for operation in
 //! the same order, so the lanes give the same bits (IEEE f64 lanes; Rust fuses nothing).
 
+use super::regs::{M, Reg, V};
 use super::{ContactAnchors, LANES};
 use crate::collision::manifold::{MAX_POINTS, Manifold};
 use crate::math::{Scalar, Vector};
 use crate::sim::bodies::Bodies;
-use wide::f64x4;
-
-/// Four f64 lanes in one register.
-type Reg = f64x4;
-
-/// One vector per lane, a register per component.
-#[derive(Clone, Copy)]
-struct V {
-    x: Reg,
-    y: Reg,
-    z: Reg,
-}
-
-impl V {
-    #[inline(always)]
-    fn gather(f: impl Fn(usize) -> Vector) -> Self {
-        let v: [Vector; LANES] = std::array::from_fn(f);
-        Self { x: Reg::new(v.map(|v| v.x)), y: Reg::new(v.map(|v| v.y)), z: Reg::new(v.map(|v| v.z)) }
-    }
-
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        Self { x: self.x + o.x, y: self.y + o.y, z: self.z + o.z }
-    }
-
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        Self { x: self.x - o.x, y: self.y - o.y, z: self.z - o.z }
-    }
-
-    /// glam's `DVec3 * f64`.
-    #[inline(always)]
-    fn scale(self, s: Reg) -> Self {
-        Self { x: self.x * s, y: self.y * s, z: self.z * s }
-    }
-
-    /// glam's `dot`: x, y, z summed in that order.
-    #[inline(always)]
-    fn dot(self, o: Self) -> Reg {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-
-    #[inline(always)]
-    fn lane(&self, l: usize) -> Vector {
-        Vector::new(self.x.as_array()[l], self.y.as_array()[l], self.z.as_array()[l])
-    }
-}
-
-/// A matrix per lane, by columns (glam's `DMat3`).
-struct M {
-    x: V,
-    y: V,
-    z: V,
-}
-
-impl M {
-    #[inline(always)]
-    fn gather(rotation: &[crate::math::Mat3], i: [usize; LANES]) -> Self {
-        Self {
-            x: V::gather(|l| rotation[i[l]].x_axis),
-            y: V::gather(|l| rotation[i[l]].y_axis),
-            z: V::gather(|l| rotation[i[l]].z_axis),
-        }
-    }
-
-    /// glam's `mul_vec3`: the columns times x, y, z, summed in that order.
-    #[inline(always)]
-    fn mul(&self, v: V) -> V {
-        self.x.scale(v.x).add(self.y.scale(v.y)).add(self.z.scale(v.z))
-    }
-
-    /// `self.transpose() * v` as glam computes it: each column dotted with `v`.
-    #[inline(always)]
-    fn transpose_mul(&self, v: V) -> V {
-        V { x: self.x.dot(v), y: self.y.dot(v), z: self.z.dot(v) }
-    }
-}
 
 /// A quaternion per lane.
 struct Q {
