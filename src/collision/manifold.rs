@@ -5,6 +5,7 @@
 use crate::collision::hull::{contact_axis_hinted, contact_axis_near, is_many_faced};
 use crate::collision::posed::Posed;
 use crate::math::{Scalar, Vector};
+use wide::f64x4;
 
 /// Most points per pair: four span any flat contact patch of a convex pair.
 pub const MAX_POINTS: usize = 4;
@@ -248,7 +249,14 @@ pub fn contact_axis_from(
 /// `contact_axis` over every face of both bodies and every pair of their edge directions.
 #[must_use]
 pub fn contact_axis_all(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
-    let lowest = |p: &Posed, dir: Vector| p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
+    let lanes = [LaneVertices::new(a), LaneVertices::new(b)];
+    let lowest = |p: &Posed, dir: Vector| {
+        let l = if std::ptr::eq(p, a) { &lanes[0] } else { &lanes[1] };
+        match l {
+            Some(l) => l.lowest(dir),
+            None => p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min),
+        }
+    };
     let mut best: Option<Axis> = None;
     let mut consider = |normal: Vector, separation: Scalar, reference: Reference, prefer: Scalar| {
         if best.is_none_or(|x| separation > x.separation + prefer) {
@@ -274,6 +282,53 @@ pub fn contact_axis_all(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar))
         }
     }
     best.filter(|x| x.separation <= reach)
+}
+
+/// Most vertices `LaneVertices` holds (four a register); larger small meshes are scanned.
+const LANE_VERTICES: usize = 32;
+
+/// A small body's vertices four to a register, for `contact_axis_all`'s many projections (a
+/// box pair's 240): each lane's dot product is glam's (x, y, z summed in that order) and a
+/// minimum is exact, so `lowest` is the scalar scan's value. The last register is filled up
+/// with repeats of the first vertex, which cannot change a minimum.
+struct LaneVertices {
+    x: [f64x4; LANE_VERTICES / 4],
+    y: [f64x4; LANE_VERTICES / 4],
+    z: [f64x4; LANE_VERTICES / 4],
+    registers: usize,
+}
+
+impl LaneVertices {
+    fn new(p: &Posed) -> Option<Self> {
+        let v = &p.vertices;
+        if v.is_empty() || v.len() > LANE_VERTICES {
+            return None;
+        }
+        let mut out = Self {
+            x: [f64x4::ZERO; LANE_VERTICES / 4],
+            y: [f64x4::ZERO; LANE_VERTICES / 4],
+            z: [f64x4::ZERO; LANE_VERTICES / 4],
+            registers: v.len().div_ceil(4),
+        };
+        for r in 0..out.registers {
+            let at = |l: usize| v.get(4 * r + l).unwrap_or(&v[0]);
+            out.x[r] = f64x4::new(std::array::from_fn(|l| at(l).x));
+            out.y[r] = f64x4::new(std::array::from_fn(|l| at(l).y));
+            out.z[r] = f64x4::new(std::array::from_fn(|l| at(l).z));
+        }
+        Some(out)
+    }
+
+    /// The least `v·dir` over the vertices.
+    fn lowest(&self, dir: Vector) -> Scalar {
+        let (dx, dy, dz) = (f64x4::splat(dir.x), f64x4::splat(dir.y), f64x4::splat(dir.z));
+        let mut low = f64x4::splat(Scalar::INFINITY);
+        for r in 0..self.registers {
+            low = low.min(self.x[r] * dx + self.y[r] * dy + self.z[r] * dz);
+        }
+        let [l0, l1, l2, l3] = low.to_array();
+        l0.min(l1).min(l2.min(l3))
+    }
 }
 
 /// The world directions of `p`'s feature edges: the posed ones, or for a many-faced body
@@ -376,6 +431,39 @@ mod tests {
     use crate::model::components::Pose;
     use crate::model::mesh::ConvexMesh;
     use std::sync::Arc;
+
+    #[test]
+    fn four_lane_lowest_projections_are_the_scans_bit_for_bit() {
+        use crate::model::shapes::{cylinder_raw, octahedron_raw, tetrahedron_raw};
+        let mesh = |(v, t): crate::model::shapes::RawMesh| Arc::new(ConvexMesh::new(v, t).expect("a shape").0);
+        let meshes = [
+            Arc::new(ConvexMesh::cuboid(Vector::new(0.3, 1.0, 2.0))),
+            mesh(tetrahedron_raw(1.0)),
+            mesh(octahedron_raw(0.7)),
+            mesh(cylinder_raw(0.5, 1.0, 7)), // 14 vertices: the last register half repeats
+            mesh(cylinder_raw(0.5, 1.0, 16)), // 32: every register full
+        ];
+        let mut rng = crate::rng::SplitMix64::new(7);
+        for m in &meshes {
+            for _ in 0..200 {
+                let axis = Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+                let pose = Pose {
+                    position: Vector::new(rng.uniform(-5.0, 5.0), rng.uniform(-5.0, 5.0), rng.uniform(-5.0, 5.0)),
+                    orientation: crate::math::Quat::from_axis_angle(
+                        axis.normalize_or(Vector::X),
+                        rng.uniform(-3.0, 3.0),
+                    ),
+                };
+                let p = Posed::new(m.clone(), &pose);
+                let dir = Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+                let scan = p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min);
+                let lanes = LaneVertices::new(&p).expect("a small mesh");
+                assert_eq!(lanes.lowest(dir).to_bits(), scan.to_bits(), "{} vertices", p.vertices.len());
+            }
+        }
+        let many = Posed::new(mesh(cylinder_raw(0.5, 1.0, 17)), &Pose::IDENTITY);
+        assert!(LaneVertices::new(&many).is_none(), "34 vertices are scanned");
+    }
 
     #[test]
     fn a_box_resting_on_a_floor_is_held_at_its_four_bottom_corners() {
