@@ -608,12 +608,7 @@ fn arcs_cross(a: Vector, b: Vector, c: Vector, d: Vector) -> bool {
 /// `None` when some axis parts them by more than `reach`.
 #[must_use]
 pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
-    let widen = reach.max(0.0) + BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius);
-    let lo = a.bounds.0.max(b.bounds.0) - Vector::splat(widen);
-    let hi = a.bounds.1.min(b.bounds.1) + Vector::splat(widen);
-    if lo.cmpgt(hi).any() {
-        return None; // apart along a coordinate axis by more than reach
-    }
+    let (lo, hi) = bounds_overlap(a, b, reach)?;
     let d = (a.position - b.position).normalize_or(Vector::Y);
     let ((from_a, low_a), (from_b, low_b)) = (lowest_vertex_seeded(a, d), lowest_vertex_seeded(b, -d));
     let high_b = -low_b;
@@ -628,17 +623,33 @@ pub fn contact_axis_near(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)
         d,
         slab: (low_a.min(high_b) - tight, low_a.max(high_b) + tight),
     };
+    with_near(|na, nb| {
+        near(a, (&region, &edges_region), from_a, na);
+        near(b, (&region, &edges_region), from_b, nb);
+        best_among(a, b, (na, nb), (margin, reach))
+    })
+}
+
+/// Runs `f` on this thread's two `Near` buffers (A's, B's). A nested call (none today) would
+/// find them taken: it gets its own.
+fn with_near<R>(f: impl FnOnce(&mut Near, &mut Near) -> R) -> R {
     NEAR.with(|cell| {
-        // A nested call (none today) would find the buffers taken: it gets its own.
         let (mut held, mut fresh) = (cell.try_borrow_mut(), None);
         let [na, nb] = match held.as_deref_mut() {
             Ok(buffers) => buffers,
             Err(_) => fresh.insert(<[Near; 2]>::default()),
         };
-        near(a, (&region, &edges_region), from_a, na);
-        near(b, (&region, &edges_region), from_b, nb);
-        best_among(a, b, (na, nb), (margin, reach))
+        f(na, nb)
     })
+}
+
+/// The overlap of the two bodies' bounds widened by `reach` (and the bounds' slack), or
+/// `None` when they are apart along a coordinate axis by more than that.
+fn bounds_overlap(a: &Posed, b: &Posed, reach: Scalar) -> Option<(Vector, Vector)> {
+    let widen = reach.max(0.0) + BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius);
+    let lo = a.bounds.0.max(b.bounds.0) - Vector::splat(widen);
+    let hi = a.bounds.1.min(b.bounds.1) + Vector::splat(widen);
+    (!lo.cmpgt(hi).any()).then_some((lo, hi))
 }
 
 /// `contact_axis_near` for a pair whose axis last step was face `f` of `hint` (B's, or A's
@@ -660,21 +671,11 @@ pub fn contact_axis_hinted(
     if f as usize >= q.plane_count() || !(is_many_faced(a) || is_many_faced(b)) {
         return crate::collision::manifold::contact_axis(a, b, (margin, reach));
     }
-    let widen = reach.max(0.0) + BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius);
-    let lo = a.bounds.0.max(b.bounds.0) - Vector::splat(widen);
-    let hi = a.bounds.1.min(b.bounds.1) + Vector::splat(widen);
-    if lo.cmpgt(hi).any() {
-        return None; // apart along a coordinate axis by more than reach
-    }
+    bounds_overlap(a, b, reach)?;
     let (face, low, separation) = climb(q, p, f);
     // Edge pairs only where the bodies meet now, as `contact_axis_near` takes them.
     let touching = separation <= BOUNDS_SLACK * a.mesh.radius.max(b.mesh.radius);
-    NEAR.with(|cell| {
-        let (mut held, mut fresh) = (cell.try_borrow_mut(), None);
-        let [na, nb] = match held.as_deref_mut() {
-            Ok(buffers) => buffers,
-            Err(_) => fresh.insert(<[Near; 2]>::default()),
-        };
+    with_near(|na, nb| {
         let (nq, np) = if of_a { (na, nb) } else { (nb, na) };
         around_face(q, face, p.vertices[low as usize], touching, nq);
         around_vertex(p, low, np);

@@ -235,27 +235,24 @@ pub fn contact_axis_from(
     (margin, reach): (Scalar, Scalar),
     hint: Option<Reference>,
 ) -> Option<Axis> {
-    match hint {
-        Some(Reference::FaceOfB(f)) if is_many_faced(a) || is_many_faced(b) => {
-            contact_axis_hinted(a, b, (margin, reach), (false, f))
-        }
-        Some(Reference::FaceOfA(f)) if is_many_faced(a) || is_many_faced(b) => {
-            contact_axis_hinted(a, b, (margin, reach), (true, f))
-        }
-        _ => contact_axis(a, b, (margin, reach)),
+    let face = match hint {
+        Some(Reference::FaceOfB(f)) => Some((false, f)),
+        Some(Reference::FaceOfA(f)) => Some((true, f)),
+        Some(Reference::Edges) | None => None,
+    };
+    match face.filter(|_| is_many_faced(a) || is_many_faced(b)) {
+        Some(face) => contact_axis_hinted(a, b, (margin, reach), face),
+        None => contact_axis(a, b, (margin, reach)),
     }
 }
 
 /// `contact_axis` over every face of both bodies and every pair of their edge directions.
 #[must_use]
 pub fn contact_axis_all(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
-    let lanes = [LaneVertices::new(a), LaneVertices::new(b)];
-    let lowest = |p: &Posed, dir: Vector| {
-        let l = if std::ptr::eq(p, a) { &lanes[0] } else { &lanes[1] };
-        match l {
-            Some(l) => l.lowest(dir),
-            None => p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min),
-        }
+    let (lanes_a, lanes_b) = (LaneVertices::new(a), LaneVertices::new(b));
+    let lowest = |lanes: &Option<LaneVertices>, p: &Posed, dir: Vector| match lanes {
+        Some(l) => l.lowest(dir),
+        None => p.vertices.iter().map(|v| v.dot(dir)).fold(Scalar::INFINITY, Scalar::min),
     };
     let mut best: Option<Axis> = None;
     let mut consider = |normal: Vector, separation: Scalar, reference: Reference, prefer: Scalar| {
@@ -264,10 +261,10 @@ pub fn contact_axis_all(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar))
         }
     };
     for (f, pl) in b.all_planes().enumerate() {
-        consider(pl.normal, lowest(a, pl.normal) - pl.offset, Reference::FaceOfB(f as u32), 0.0);
+        consider(pl.normal, lowest(&lanes_a, a, pl.normal) - pl.offset, Reference::FaceOfB(f as u32), 0.0);
     }
     for (f, pl) in a.all_planes().enumerate() {
-        consider(-pl.normal, lowest(b, pl.normal) - pl.offset, Reference::FaceOfA(f as u32), PREFER * margin);
+        consider(-pl.normal, lowest(&lanes_b, b, pl.normal) - pl.offset, Reference::FaceOfA(f as u32), PREFER * margin);
     }
     let centre = a.position - b.position;
     let (edges_a, edges_b) = (edge_directions(a), edge_directions(b));
@@ -278,7 +275,7 @@ pub fn contact_axis_all(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar))
                 continue; // parallel edges: their plane's normal is a face axis already
             }
             let n = if cross.dot(centre) < 0.0 { -cross.normalize() } else { cross.normalize() };
-            consider(n, lowest(a, n) + lowest(b, -n), Reference::Edges, PREFER * margin);
+            consider(n, lowest(&lanes_a, a, n) + lowest(&lanes_b, b, -n), Reference::Edges, PREFER * margin);
         }
     }
     best.filter(|x| x.separation <= reach)
