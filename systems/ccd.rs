@@ -10,10 +10,9 @@
 //! `integrate` moves them through the rest of the step. When no body is that fast (every
 //! case of §4, box-gas) it looks at each body's speed once and does nothing else.
 
-use crate::collision::contact::Pair;
 use crate::collision::manifold::ClipScratch;
 use crate::collision::posed::Posed;
-use crate::collision::toi::{Approach, impact_contact, time_of_impact};
+use crate::collision::toi::{Approach, box_time_of_impact, impact_contact, time_of_impact};
 use crate::math::{Mat3, Scalar, Vector, exp_map};
 use crate::model::components::{ActorIndex, Pose};
 use crate::model::mesh::{MeshId, MeshTable};
@@ -152,19 +151,23 @@ fn prepare(world: &World, ctx: &StepContext, s: &mut CcdScratch, speed: Scalar) 
 
 /// The swept pairs: a mover with a speculative distance (under gravity or friction) finds
 /// every body it may reach among the step's pairs, which the broad phase widened by that
-/// distance; any other mover searches all bodies.
+/// distance; any other mover searches all bodies. Nothing has flown yet, so each body's sweep
+/// is worked out once here, not once per pair.
 fn candidates(ctx: &StepContext, s: &mut CcdScratch) {
     let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
-    let widened = |i: usize| params.speculative_distance(dt, b, i) > 0.0;
+    let sweeps: Vec<Sweep> = (0..b.len()).map(|k| sweep_of(ctx, s, k)).collect();
+    let widened: Vec<bool> = (0..b.len()).map(|i| s.mover[i] && params.speculative_distance(dt, b, i) > 0.0).collect();
     for i in 0..b.len() {
-        if s.mover[i] && !widened(i) {
-            search(ctx, s, i);
+        if s.mover[i] && !widened[i] {
+            s.searched[i] = true;
+            for j in (0..b.len()).filter(|&j| j != i) {
+                consider_swept(ctx, s, (i, j), (&sweeps[i], &sweeps[j]));
+            }
         }
     }
-    let listed = |p: &&Pair| [p.a, p.b].iter().any(|&i| s.mover[i as usize] && widened(i as usize));
-    let found: Vec<(u32, u32)> = ctx.pairs.iter().filter(listed).map(|p| (p.a, p.b)).collect();
-    for (a, c) in found {
-        consider(ctx, s, a as usize, c as usize);
+    for p in ctx.pairs.iter().filter(|p| widened[p.a as usize] || widened[p.b as usize]) {
+        let (i, j) = (p.a as usize, p.b as usize);
+        consider_swept(ctx, s, (i, j), (&sweeps[i], &sweeps[j]));
     }
     s.pairs.sort_unstable_by_key(|p| (p.a, p.b));
     s.pairs.dedup_by_key(|p| (p.a, p.b));
@@ -177,31 +180,49 @@ fn candidates(ctx: &StepContext, s: &mut CcdScratch) {
 fn search(ctx: &StepContext, s: &mut CcdScratch, i: usize) {
     s.searched[i] = true;
     for j in (0..ctx.bodies.len()).filter(|&j| j != i) {
-        consider(ctx, s, i, j);
+        let (si, sj) = (sweep_of(ctx, s, i), sweep_of(ctx, s, j));
+        consider_swept(ctx, s, (i, j), (&si, &sj));
     }
 }
 
-/// Adds pair (i, j) when the two may meet within the step (their bounding spheres swept along
-/// their centres' paths over the rest of it meet) and travel fast enough to pass through each
-/// other; not a jointed body's (its joints and contacts are solved together, by `solve`).
-fn consider(ctx: &StepContext, s: &mut CcdScratch, i: usize, j: usize) {
+/// What `consider_swept` asks of a body: the sphere it sweeps over the rest of the step along
+/// its centre's path (centre and radius [m]), how far its points may travel in the step [m],
+/// and its thickness [m].
+struct Sweep {
+    centre: Vector,
+    radius: Scalar,
+    travel: Scalar,
+    thickness: Scalar,
+}
+
+/// Body k's `Sweep` as it stands.
+fn sweep_of(ctx: &StepContext, s: &CcdScratch, k: usize) -> Sweep {
     let (b, dt) = (&ctx.bodies, ctx.dt);
+    let from = if s.flown[k] { b.position[k] } else { s.start[k].position };
+    let to = b.position[k] + b.velocity[k] * (dt - s.taken[k]);
+    Sweep {
+        centre: 0.5 * (from + to),
+        radius: b.radius[k] + 0.5 * (to - from).abs().element_sum(),
+        travel: (b.velocity[k].length() + b.angular_velocity[k].length() * b.radius[k]) * dt,
+        thickness: ctx.meshes.get(b.mesh[k]).thickness,
+    }
+}
+
+/// Adds pair (i, j) when the two may meet within the step (their swept spheres meet) and
+/// travel fast enough to pass through each other; not a jointed body's (its joints and
+/// contacts are solved together, by `solve`).
+fn consider_swept(ctx: &StepContext, s: &mut CcdScratch, (i, j): (usize, usize), (si, sj): (&Sweep, &Sweep)) {
+    let b = &ctx.bodies;
     if s.jointed[i] || s.jointed[j] {
         return;
     }
-    let sphere = |k: usize| {
-        let from = if s.flown[k] { b.position[k] } else { s.start[k].position };
-        let to = b.position[k] + b.velocity[k] * (dt - s.taken[k]);
-        (0.5 * (from + to), b.radius[k] + 0.5 * (to - from).abs().element_sum())
-    };
-    let ((ci, ri), (cj, rj)) = (sphere(i), sphere(j));
+    let (gap, reach) = (si.centre - sj.centre, si.radius + sj.radius);
     // Box about the spheres (no square root): most bodies are far.
-    if (ci - cj).abs().max_element() > ri + rj || (ci - cj).length() > ri + rj {
+    if gap.abs().max_element() > reach || gap.length() > reach {
         return;
     }
-    let travel = |k: usize| (b.velocity[k].length() + b.angular_velocity[k].length() * b.radius[k]) * dt;
     let key = (i.min(j) as u32, i.max(j) as u32);
-    if b.is_fixed(i) && b.is_fixed(j) || travel(i) + travel(j) <= FAST_FRACTION * b.thinner(&ctx.meshes, i, j) {
+    if b.is_fixed(i) && b.is_fixed(j) || si.travel + sj.travel <= FAST_FRACTION * si.thickness.min(sj.thickness) {
         return;
     }
     s.pairs.push(Swept { a: key.0, b: key.1, next: None });
@@ -318,11 +339,16 @@ fn next_impact(ctx: &StepContext, s: &CcdScratch, k: usize) -> Option<Scalar> {
     if apart > ((pa.v - pb.v).length() + spin) * (dt - start) {
         return None;
     }
-    let posed = |i: usize, p: &Path| Posed::new(ctx.meshes.get_arc(b.mesh[i]), &p.at(start));
-    let (mut a, mut c) = (posed(ia, &pa), posed(ib, &pb));
     let approach = Approach { relative_velocity: pa.v - pb.v, spin };
     let gap = IMPACT_GAP * b.thinner(&ctx.meshes, ia, ib);
-    time_of_impact((&mut a, &mut c), |t| (pa.at(t), pb.at(t)), &approach, (start, dt), gap)
+    let place = |t| (pa.at(t), pb.at(t));
+    let (ma, mc) = (ctx.meshes.get(b.mesh[ia]), ctx.meshes.get(b.mesh[ib]));
+    if ma.box_layout.is_some() && mc.box_layout.is_some() {
+        return box_time_of_impact((ma, mc), place, &approach, (start, dt), gap);
+    }
+    let posed = |i: usize, p: &Path| Posed::new(ctx.meshes.get_arc(b.mesh[i]), &p.at(start));
+    let (mut a, mut c) = (posed(ia, &pa), posed(ib, &pb));
+    time_of_impact((&mut a, &mut c), place, &approach, (start, dt), gap)
 }
 
 /// The impact of bodies `ia < ib`, both flown to its time: the corrected impulse (§2.5) with

@@ -2,6 +2,7 @@
 //! press on each other, so a box lying on a face is held at its corners and does not rock
 //! about the single point the detection tests report.
 
+use crate::collision::boxes::{BoxAt, box_contact_axis};
 use crate::collision::hull::{contact_axis_hinted, contact_axis_near, is_many_faced};
 use crate::collision::posed::Posed;
 use crate::math::{Scalar, Vector};
@@ -246,9 +247,20 @@ pub fn contact_axis_from(
     }
 }
 
-/// `contact_axis` over every face of both bodies and every pair of their edge directions.
+/// `contact_axis` over every face of both bodies and every pair of their edge directions; two
+/// boxes from their poses and half extents (`boxes::box_contact_axis`), any other pair by
+/// projecting the vertices (`contact_axis_scan`).
 #[must_use]
 pub fn contact_axis_all(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
+    match (BoxAt::posed(a), BoxAt::posed(b)) {
+        (Some(a), Some(b)) => box_contact_axis(&a, &b, (margin, reach)),
+        _ => contact_axis_scan(a, b, (margin, reach)),
+    }
+}
+
+/// `contact_axis_all` by projecting both bodies' vertices on each axis.
+#[must_use]
+pub fn contact_axis_scan(a: &Posed, b: &Posed, (margin, reach): (Scalar, Scalar)) -> Option<Axis> {
     let (lanes_a, lanes_b) = (LaneVertices::new(a), LaneVertices::new(b));
     let lowest = |lanes: &Option<LaneVertices>, p: &Posed, dir: Vector| match lanes {
         Some(l) => l.lowest(dir),

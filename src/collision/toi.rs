@@ -7,11 +7,13 @@
 //! by that, again and again, reaches the first time they come within the wanted gap and never
 //! passes it, whatever the shapes, spins and speeds.
 
+use crate::collision::boxes::{BoxAt, box_contact_axis};
 use crate::collision::contact::{Contact, Feature};
 use crate::collision::manifold::{Axis, ClipScratch, contact_axis, manifold, support_point};
 use crate::collision::posed::Posed;
 use crate::math::{Scalar, Vector};
 use crate::model::components::Pose;
+use crate::model::mesh::ConvexMesh;
 
 /// Most advances per pair and query. Each closes a fixed share of the gap when spin dominates
 /// the bound; a query that runs out reports the (safe) time it reached as the impact.
@@ -54,15 +56,45 @@ pub fn time_of_impact(
     (a, b): (&mut Posed, &mut Posed),
     place: impl Fn(Scalar) -> (Pose, Pose),
     approach: &Approach,
+    window: (Scalar, Scalar),
+    gap: Scalar,
+) -> Option<Scalar> {
+    let axis_at = |t: Scalar| {
+        let (pa, pb) = place(t);
+        a.update(&pa);
+        b.update(&pb);
+        contact_axis(a, b, (0.0, Scalar::INFINITY))
+    };
+    advance(axis_at, approach, window, gap)
+}
+
+/// `time_of_impact` of two boxes, from their poses alone (`boxes::box_contact_axis`): nothing
+/// is posed at the times it tries.
+pub fn box_time_of_impact(
+    (a, b): (&ConvexMesh, &ConvexMesh),
+    place: impl Fn(Scalar) -> (Pose, Pose),
+    approach: &Approach,
+    window: (Scalar, Scalar),
+    gap: Scalar,
+) -> Option<Scalar> {
+    let axis_at = |t: Scalar| {
+        let (pa, pb) = place(t);
+        let (a, b) = (BoxAt::new(a, &pa)?, BoxAt::new(b, &pb)?);
+        box_contact_axis(&a, &b, (0.0, Scalar::INFINITY))
+    };
+    advance(axis_at, approach, window, gap)
+}
+
+/// Conservative advancement with `axis_at(t)`, the pair's best axis at time t.
+fn advance(
+    mut axis_at: impl FnMut(Scalar) -> Option<Axis>,
+    approach: &Approach,
     (start, end): (Scalar, Scalar),
     gap: Scalar,
 ) -> Option<Scalar> {
     let (mut t, mut target) = (start, gap);
     for k in 0..MAX_ADVANCES {
-        let (pa, pb) = place(t);
-        a.update(&pa);
-        b.update(&pb);
-        let Axis { separation, normal, .. } = contact_axis(a, b, (0.0, Scalar::INFINITY))?;
+        let Axis { separation, normal, .. } = axis_at(t)?;
         if k == 0 {
             if separation <= TOUCHING * gap {
                 return None;
@@ -103,7 +135,6 @@ pub fn impact_contact(a: &Posed, b: &Posed, scratch: &mut ClipScratch) -> Option
 mod tests {
     use super::*;
     use crate::math::Quat;
-    use crate::model::mesh::ConvexMesh;
     use std::sync::Arc;
 
     fn cube(x: Scalar) -> Posed {
@@ -119,6 +150,9 @@ mod tests {
         let approach = Approach { relative_velocity: Vector::new(10.0, 0.0, 0.0), spin: 0.0 };
         let t = time_of_impact((&mut a, &mut b), place, &approach, (0.0, 1.0), 0.005).expect("they meet");
         assert!((t - (2.0 - 0.005) / 10.0).abs() < 1e-12, "{t}");
+        // From the poses alone, the same time.
+        let cube = ConvexMesh::cuboid(Vector::ONE);
+        assert_eq!(box_time_of_impact((&cube, &cube), place, &approach, (0.0, 1.0), 0.005), Some(t));
         // Too slow to meet within the step, or moving apart: none.
         assert_eq!(time_of_impact((&mut a, &mut b), place, &approach, (0.0, 0.1), 0.005), None);
         let away = Approach { relative_velocity: Vector::new(-10.0, 0.0, 0.0), spin: 0.0 };

@@ -66,6 +66,10 @@ pub struct ConvexMesh {
     /// Half extents when the mesh is a box aligned with its body axes (its 8 vertices are
     /// (±x, ±y, ±z)): pairs of such boxes get the cheap oriented-box separation test.
     pub box_half_extents: Option<Vector>,
+    /// For such a box, each face plane (in order) as the body axis its normal lies along and
+    /// the side (±1), and each edge direction (in order) as its axis: the separating-axis
+    /// search of two boxes (`collision::boxes`) visits them in the order of the general one.
+    pub box_layout: Option<BoxLayout>,
     /// The vertices joined to vertex i by an edge:
     /// `neighbours[neighbour_start[i]..neighbour_start[i + 1]]`. Walking them finds the vertex
     /// farthest along a direction in about √V steps instead of V (a many-faced hull's support).
@@ -134,6 +138,7 @@ impl ConvexMesh {
         let box_half_extents = cuboid_half_extents(&vertices);
         let edges = unique_edges(&triangles);
         let (feature_edges, edge_directions) = feature_edges(&vertices, &triangles);
+        let box_layout = box_half_extents.and_then(|_| BoxLayout::new(&planes, &edge_directions));
         let (neighbours, neighbour_start) = adjacency(vertices.len(), &edges);
         let feature_edge_faces = edge_faces(&feature_edges, &triangles, &plane_of);
         let (vertex_faces, vertex_face_start) = grouped(
@@ -167,6 +172,7 @@ impl ConvexMesh {
             edge_directions,
             feature_edges,
             box_half_extents,
+            box_layout,
             neighbours,
             neighbour_start,
             feature_edge_faces,
@@ -393,6 +399,29 @@ fn check_convex(vertices: &[Vector], planes: &[Plane], size: Scalar) -> Result<(
 }
 
 /// `Some(h)` when the vertices are exactly the 8 corners (±h.x, ±h.y, ±h.z).
+/// A box's faces and edge directions by body axis (`ConvexMesh::box_layout`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoxLayout {
+    /// Face plane f lies on the side `faces[f].1` (±1) of body axis `faces[f].0`.
+    pub faces: [(usize, Scalar); 6],
+    /// Edge direction e lies along body axis `edges[e]`.
+    pub edges: [usize; 3],
+}
+
+impl BoxLayout {
+    /// The layout of a box's 6 planes and 3 edge directions, if it has that many.
+    fn new(planes: &[Plane], edge_directions: &[Vector]) -> Option<Self> {
+        let axis_of =
+            |v: Vector| v.abs().to_array().iter().enumerate().max_by(|x, y| x.1.total_cmp(y.1)).map_or(0, |m| m.0);
+        let faces: [(usize, Scalar); 6] = std::array::from_fn(|f| {
+            let n = planes.get(f).map_or(Vector::X, |p| p.normal);
+            (axis_of(n), n.to_array()[axis_of(n)].signum())
+        });
+        let edges = std::array::from_fn(|e| edge_directions.get(e).map_or(0, |&d| axis_of(d)));
+        (planes.len() == 6 && edge_directions.len() == 3).then_some(Self { faces, edges })
+    }
+}
+
 fn cuboid_half_extents(vertices: &[Vector]) -> Option<Vector> {
     let h = vertices.first()?.abs();
     let corner = |v: &Vector| (v.abs() - h).abs().max_element() <= 1e-12 * h.max_element();
@@ -548,6 +577,16 @@ mod tests {
         assert_eq!((m.vertices.len(), m.triangles.len(), m.edges.len(), m.planes.len()), (8, 12, 18, 6));
         assert_eq!((m.edge_directions.len(), m.feature_edges.len()), (3, 12));
         assert_eq!(m.box_half_extents, Some(Vector::splat(0.5)));
+        // Each body axis has a face on either side, and each is an edge direction once.
+        let layout = m.box_layout.expect("a box's layout");
+        for axis in 0..3 {
+            let sides: Vec<Scalar> = layout.faces.iter().filter(|f| f.0 == axis).map(|f| f.1).collect();
+            assert!(sides.len() == 2 && sides.contains(&1.0) && sides.contains(&-1.0), "axis {axis}: {sides:?}");
+            assert_eq!(layout.edges.iter().filter(|&&e| e == axis).count(), 1, "axis {axis}");
+        }
+        for (f, &(axis, side)) in layout.faces.iter().enumerate() {
+            assert_eq!(m.planes[f].normal.to_array()[axis], side, "face {f}");
+        }
         assert_eq!(c, Vector::ZERO);
         assert!((m.radius - 3f64.sqrt() / 2.0).abs() < 1e-15);
         assert!((m.thickness - 1.0).abs() < 1e-15);
