@@ -151,23 +151,24 @@ fn prepare(world: &World, ctx: &StepContext, s: &mut CcdScratch, speed: Scalar) 
 
 /// The swept pairs: a mover with a speculative distance (under gravity or friction) finds
 /// every body it may reach among the step's pairs, which the broad phase widened by that
-/// distance; any other mover searches all bodies. Nothing has flown yet, so each body's sweep
-/// is worked out once here, not once per pair.
+/// distance; any other mover searches all bodies. Nothing has flown yet, so each body's sphere
+/// and travel are worked out once here, not once per pair.
 fn candidates(ctx: &StepContext, s: &mut CcdScratch) {
     let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
-    let sweeps: Vec<Sweep> = (0..b.len()).map(|k| sweep_of(ctx, s, k)).collect();
+    let spheres: Vec<Sphere> = (0..b.len()).map(|k| sphere_of(ctx, s, k)).collect();
+    let travels: Vec<(Scalar, Scalar)> = (0..b.len()).map(|k| travel_of(ctx, k)).collect();
     let widened: Vec<bool> = (0..b.len()).map(|i| s.mover[i] && params.speculative_distance(dt, b, i) > 0.0).collect();
     for i in 0..b.len() {
         if s.mover[i] && !widened[i] {
             s.searched[i] = true;
             for j in (0..b.len()).filter(|&j| j != i) {
-                consider_swept(ctx, s, (i, j), (&sweeps[i], &sweeps[j]));
+                consider(ctx, s, (i, j), (&spheres[i], &spheres[j]), |k| travels[k]);
             }
         }
     }
     for p in ctx.pairs.iter().filter(|p| widened[p.a as usize] || widened[p.b as usize]) {
         let (i, j) = (p.a as usize, p.b as usize);
-        consider_swept(ctx, s, (i, j), (&sweeps[i], &sweeps[j]));
+        consider(ctx, s, (i, j), (&spheres[i], &spheres[j]), |k| travels[k]);
     }
     s.pairs.sort_unstable_by_key(|p| (p.a, p.b));
     s.pairs.dedup_by_key(|p| (p.a, p.b));
@@ -179,50 +180,54 @@ fn candidates(ctx: &StepContext, s: &mut CcdScratch) {
 /// Adds the pairs of body `i` with every body whose swept sphere meets its own.
 fn search(ctx: &StepContext, s: &mut CcdScratch, i: usize) {
     s.searched[i] = true;
+    let si = sphere_of(ctx, s, i);
     for j in (0..ctx.bodies.len()).filter(|&j| j != i) {
-        let (si, sj) = (sweep_of(ctx, s, i), sweep_of(ctx, s, j));
-        consider_swept(ctx, s, (i, j), (&si, &sj));
+        let sj = sphere_of(ctx, s, j);
+        consider(ctx, s, (i, j), (&si, &sj), |k| travel_of(ctx, k));
     }
 }
 
-/// What `consider_swept` asks of a body: the sphere it sweeps over the rest of the step along
-/// its centre's path (centre and radius [m]), how far its points may travel in the step [m],
-/// and its thickness [m].
-struct Sweep {
-    centre: Vector,
-    radius: Scalar,
-    travel: Scalar,
-    thickness: Scalar,
-}
+/// The sphere a body sweeps over the rest of the step along its centre's path: centre and
+/// radius [m].
+struct Sphere(Vector, Scalar);
 
-/// Body k's `Sweep` as it stands.
-fn sweep_of(ctx: &StepContext, s: &CcdScratch, k: usize) -> Sweep {
+/// Body k's `Sphere` as it stands.
+fn sphere_of(ctx: &StepContext, s: &CcdScratch, k: usize) -> Sphere {
     let (b, dt) = (&ctx.bodies, ctx.dt);
     let from = if s.flown[k] { b.position[k] } else { s.start[k].position };
     let to = b.position[k] + b.velocity[k] * (dt - s.taken[k]);
-    Sweep {
-        centre: 0.5 * (from + to),
-        radius: b.radius[k] + 0.5 * (to - from).abs().element_sum(),
-        travel: (b.velocity[k].length() + b.angular_velocity[k].length() * b.radius[k]) * dt,
-        thickness: ctx.meshes.get(b.mesh[k]).thickness,
-    }
+    Sphere(0.5 * (from + to), b.radius[k] + 0.5 * (to - from).abs().element_sum())
+}
+
+/// How far body k's points may travel in the step [m], and its thickness [m].
+fn travel_of(ctx: &StepContext, k: usize) -> (Scalar, Scalar) {
+    let (b, dt) = (&ctx.bodies, ctx.dt);
+    let travel = (b.velocity[k].length() + b.angular_velocity[k].length() * b.radius[k]) * dt;
+    (travel, ctx.meshes.get(b.mesh[k]).thickness)
 }
 
 /// Adds pair (i, j) when the two may meet within the step (their swept spheres meet) and
-/// travel fast enough to pass through each other; not a jointed body's (its joints and
-/// contacts are solved together, by `solve`).
-fn consider_swept(ctx: &StepContext, s: &mut CcdScratch, (i, j): (usize, usize), (si, sj): (&Sweep, &Sweep)) {
+/// travel fast enough to pass through each other (`travel` of each: `travel_of`); not a
+/// jointed body's (its joints and contacts are solved together, by `solve`).
+fn consider(
+    ctx: &StepContext,
+    s: &mut CcdScratch,
+    (i, j): (usize, usize),
+    (si, sj): (&Sphere, &Sphere),
+    travel: impl Fn(usize) -> (Scalar, Scalar),
+) {
     let b = &ctx.bodies;
     if s.jointed[i] || s.jointed[j] {
         return;
     }
-    let (gap, reach) = (si.centre - sj.centre, si.radius + sj.radius);
+    let (gap, reach) = (si.0 - sj.0, si.1 + sj.1);
     // Box about the spheres (no square root): most bodies are far.
     if gap.abs().max_element() > reach || gap.length() > reach {
         return;
     }
     let key = (i.min(j) as u32, i.max(j) as u32);
-    if b.is_fixed(i) && b.is_fixed(j) || si.travel + sj.travel <= FAST_FRACTION * si.thickness.min(sj.thickness) {
+    let ((ti, hi), (tj, hj)) = (travel(i), travel(j));
+    if b.is_fixed(i) && b.is_fixed(j) || ti + tj <= FAST_FRACTION * hi.min(hj) {
         return;
     }
     s.pairs.push(Swept { a: key.0, b: key.1, next: None });
