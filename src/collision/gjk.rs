@@ -145,6 +145,49 @@ pub fn distance_bound_from(a: Shape, b: Shape, enough: Scalar, starts: Option<[u
     (bound, first)
 }
 
+/// How far apart `a` and `b` are along the best axis GJK finds, run until its lower bound is
+/// within `tolerance` [m] of the distance it closes in on: that separation [m] (0 when they
+/// touch or overlap) and the axis, a unit vector from B to A. Any such axis is a separating
+/// axis, so the separation bounds the distance from below (conservative advancement,
+/// `toi::placed_time_of_impact`). `ends` holds where the support walks start and is left
+/// where they ended: the next call, at nearby poses, starts there.
+#[must_use]
+pub fn separation(a: Shape, b: Shape, tolerance: Scalar, ends: &mut [u32; 2]) -> (Scalar, Vector) {
+    let (ca, cb) = (a.centre(), b.centre());
+    let [mut sa, mut sb] = *ends;
+    let mut support = |d: Vector| {
+        let (i, wa) = a.lowest(-d, sa);
+        let (j, wb) = b.lowest(d, sb);
+        (sa, sb) = (i, j);
+        wa - wb
+    };
+    let mut simplex = Simplex::default();
+    let mut v = ca - cb;
+    let mut best = (0.0, Vector::ZERO);
+    if v != Vector::ZERO {
+        for _ in 0..GJK_ITERATIONS {
+            let w = support(-v);
+            let length = v.length();
+            // Every point of A − B lies at least v·w/|v| from the origin along v's direction.
+            let bound = v.dot(w) / length;
+            if bound > best.0 {
+                best = (bound, v / length);
+            }
+            let stalled = simplex.points().iter().any(|&p| (p - w).length_squared() <= 1e-24 * length * length);
+            if stalled || length - best.0 <= tolerance {
+                break;
+            }
+            simplex.push(w);
+            match closest_to_origin(&mut simplex) {
+                Some(closest) if closest != Vector::ZERO => v = closest,
+                _ => break, // touching or overlapping
+            }
+        }
+    }
+    *ends = [sa, sb];
+    best
+}
+
 /// The point of the hull of `s` (1 to 4 points) closest to the origin; `s` keeps only the
 /// points that point is a combination of. `None` when the origin is inside (or on) the hull.
 fn closest_to_origin(s: &mut Simplex) -> Option<Vector> {
