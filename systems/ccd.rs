@@ -4,7 +4,8 @@
 //! each pair fast enough to pass through one another is advanced to its time of impact
 //! (`collision::toi`), given the corrected impulse of §2.5 (with the pair's restitution, and
 //! Coulomb friction) there, and flies on. Impacts are taken earliest first, so chains within a
-//! step come out in order.
+//! step come out in order. A body that used up its impacts (squeezed) ends the squeeze with
+//! one inelastic impulse over its contacts (`squeeze`).
 //!
 //! The bodies it moves are left at their last impact, with the time they have flown:
 //! `integrate` moves them through the rest of the step. When no body is that fast (every
@@ -22,6 +23,8 @@ use crate::solver::Joints;
 use crate::systems::{collision_impulse, rotate_free, state};
 use hecs::World;
 
+mod squeeze;
+
 /// A pair is swept when the two bodies travel more than this share of the thinner one's
 /// thickness in a step. Below half, the discrete tests find the near face and the right normal
 /// (docs/physics.md §5); this leaves a margin, and keeps box-gas's fastest pairs (about 0.37)
@@ -33,7 +36,7 @@ pub const FAST_FRACTION: Scalar = 0.4;
 pub const IMPACT_GAP: Scalar = 0.005;
 
 /// Most impacts per body and step: a body squeezed between two walls bounces on, and a crowd
-/// struck by a bullet passes the blow on; past this a body is left to the discrete tests.
+/// struck by a bullet passes the blow on; the last ends the squeeze (`squeeze`).
 const IMPACTS_PER_BODY: u32 = 8;
 
 /// One pair being swept, `a < b`, and its next impact time, if any.
@@ -246,7 +249,13 @@ fn impacts(ctx: &mut StepContext, s: &mut CcdScratch, speed: Scalar) {
             s.impacts[i] += 1;
         }
         collide(ctx, s, a as usize, b as usize);
+        let mut partners = Vec::new();
         for i in [a as usize, b as usize] {
+            if s.impacts[i] == IMPACTS_PER_BODY && !ctx.bodies.is_fixed(i) {
+                partners.extend(squeeze::squeeze(ctx, s, i, t));
+            }
+        }
+        for i in [a as usize, b as usize].into_iter().chain(partners.iter().copied()) {
             if !s.searched[i] && faster(&ctx.bodies, i, speed) {
                 let known = s.pairs.len();
                 search(ctx, s, i);
@@ -259,7 +268,7 @@ fn impacts(ctx: &mut StepContext, s: &mut CcdScratch, speed: Scalar) {
             }
         }
         for k in 0..s.pairs.len() {
-            if [s.pairs[k].a, s.pairs[k].b].iter().any(|&i| i == a || i == b) {
+            if [s.pairs[k].a, s.pairs[k].b].iter().any(|&i| i == a || i == b || partners.contains(&(i as usize))) {
                 s.pairs[k].next = next_impact(ctx, s, k);
             }
         }

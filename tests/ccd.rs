@@ -219,6 +219,42 @@ fn a_projectile_stays_inside_a_box_gas_box() {
     assert!(((e1 - e0) / e0).abs() < 1e-3, "energy {e0} -> {e1}");
 }
 
+/// A light cube between a thin wall and a heavy cube that touches it and closes at 10 to 120
+/// m/s: with e = 1 it would bounce between the two without end within one step. Its last
+/// impact ends the squeeze, inelastic, so neither passes through the other or the wall (flying
+/// on unswept, both went through the wall, at every mass and speed here), the heavy one stops
+/// against the light one, and no energy is made.
+#[test]
+fn a_cube_squeezed_against_a_wall_by_a_heavy_one_stays_on_its_side() {
+    for (mass, speed) in [(1.0, 10.0), (1.0, 120.0), (100.0, 10.0), (100.0, 60.0)] {
+        let mut sim = sim_from_text(&format!(
+            "Scene(dt: {DT}, gravity: (0.0, 0.0, 0.0), actors: [
+                Actor(name: \"wall\", shape: Box(size: (0.1, 20.0, 20.0)), position: (1.0, 0.0, 0.0),
+                      fixed: true, restitution: 1.0),
+                Actor(name: \"heavy\", shape: Box(size: (0.5, 0.5, 0.5)), mass: {mass}, position: (0.5, 0.0, 0.0),
+                      velocity: ({speed}, 0.0, 0.0), restitution: 1.0),
+                Actor(name: \"light\", shape: Box(size: (0.1, 0.1, 0.1)), mass: 0.01,
+                      position: (0.8, 0.0, 0.0), restitution: 1.0),
+            ])"
+        ));
+        let what = format!("{mass} kg at {speed} m/s");
+        let e0 = sim.totals().kinetic_energy;
+        for _ in 0..60 {
+            sim.step().expect("finite");
+            for (a, b) in [("heavy", "light"), ("light", "wall")] {
+                let s = separation(&sim, a, b);
+                assert!(s >= -1e-9, "{what}, step {}: '{a}' and '{b}' overlap by {}", sim.steps, -s);
+            }
+            let x = |name: &str| actor(&sim, name).pose.position.x;
+            assert!(x("heavy") < x("light") && x("light") < x("wall"), "{what}, step {}: out of order", sim.steps);
+            let e = sim.totals().kinetic_energy;
+            assert!(e <= e0 * (1.0 + 1e-12), "{what}, step {}: energy {e0} -> {e}", sim.steps);
+        }
+        let heavy = actor(&sim, "heavy").velocity.linear.x;
+        assert!(heavy <= speed * 1e-9, "{what}: the heavy cube still closes on the wall at {heavy} m/s");
+    }
+}
+
 #[test]
 fn fast_bodies_give_the_same_bits_on_one_thread_or_two() {
     let run = |threads: usize| {
