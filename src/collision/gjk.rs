@@ -28,6 +28,28 @@ impl Simplex {
         self.p[self.len] = w;
         self.len += 1;
     }
+
+    /// True when `w` is one of the points, to round-off at the scale `length`: no progress.
+    fn holds(&self, w: Vector, length: Scalar) -> bool {
+        self.points().iter().any(|&p| (p - w).length_squared() <= 1e-24 * length * length)
+    }
+}
+
+/// Support points of A − B, each pair of walks starting where the last ended (`ends`).
+struct Walks<'a> {
+    a: Shape<'a>,
+    b: Shape<'a>,
+    ends: [u32; 2],
+}
+
+impl Walks<'_> {
+    /// The support of the Minkowski difference A − B along d: A's highest minus B's lowest.
+    fn support(&mut self, d: Vector) -> Vector {
+        let (i, wa) = self.a.lowest(-d, self.ends[0]);
+        let (j, wb) = self.b.lowest(d, self.ends[1]);
+        self.ends = [i, j];
+        wa - wb
+    }
 }
 
 /// Most GJK iterations before giving up on a proof (it then says "not proved apart", which
@@ -102,10 +124,9 @@ pub fn distance_bound(a: Shape, b: Shape, enough: Scalar) -> Scalar {
 /// the same.
 #[must_use]
 pub fn distance_bound_from(a: Shape, b: Shape, enough: Scalar, starts: Option<[u32; 2]>) -> (Scalar, [u32; 2]) {
-    // Support of the Minkowski difference A − B along d: A's highest minus B's lowest.
     let (ca, cb) = (a.centre(), b.centre());
     let centre = cb - ca;
-    let ((mut sa, wa), (mut sb, wb)) = match starts {
+    let ((sa, wa), (sb, wb)) = match starts {
         Some([i, j]) => (a.lowest(-centre, i), b.lowest(centre, j)),
         None => (a.lowest_seeded(-centre), b.lowest_seeded(centre)),
     };
@@ -113,12 +134,7 @@ pub fn distance_bound_from(a: Shape, b: Shape, enough: Scalar, starts: Option<[u
     // The first support direction is this line of centres, whose walks just ended at these
     // vertices: walking again from them would stay there.
     let mut first_support = Some(wa - wb);
-    let mut support = |d: Vector| {
-        let (i, wa) = a.lowest(-d, sa);
-        let (j, wb) = b.lowest(d, sb);
-        (sa, sb) = (i, j);
-        wa - wb
-    };
+    let mut walks = Walks { a, b, ends: first };
     let mut simplex = Simplex::default();
     let mut v = ca - cb;
     let mut bound: Scalar = 0.0;
@@ -126,14 +142,14 @@ pub fn distance_bound_from(a: Shape, b: Shape, enough: Scalar, starts: Option<[u
         return (bound, first);
     }
     for _ in 0..GJK_ITERATIONS {
-        let w = first_support.take().unwrap_or_else(|| support(-v));
+        let w = first_support.take().unwrap_or_else(|| walks.support(-v));
         let length = v.length();
         // Every point of A − B lies at least v·w/|v| from the origin along v's direction.
         bound = bound.max(v.dot(w) / length);
         if bound > enough {
             return (bound, first);
         }
-        if simplex.points().iter().any(|&p| (p - w).length_squared() <= 1e-24 * length * length) {
+        if simplex.holds(w, length) {
             return (bound, first); // no progress: as close as GJK gets (or round-off)
         }
         simplex.push(w);
@@ -154,27 +170,20 @@ pub fn distance_bound_from(a: Shape, b: Shape, enough: Scalar, starts: Option<[u
 #[must_use]
 pub fn separation(a: Shape, b: Shape, tolerance: Scalar, ends: &mut [u32; 2]) -> (Scalar, Vector) {
     let (ca, cb) = (a.centre(), b.centre());
-    let [mut sa, mut sb] = *ends;
-    let mut support = |d: Vector| {
-        let (i, wa) = a.lowest(-d, sa);
-        let (j, wb) = b.lowest(d, sb);
-        (sa, sb) = (i, j);
-        wa - wb
-    };
+    let mut walks = Walks { a, b, ends: *ends };
     let mut simplex = Simplex::default();
     let mut v = ca - cb;
     let mut best = (0.0, Vector::ZERO);
     if v != Vector::ZERO {
         for _ in 0..GJK_ITERATIONS {
-            let w = support(-v);
+            let w = walks.support(-v);
             let length = v.length();
             // Every point of A − B lies at least v·w/|v| from the origin along v's direction.
             let bound = v.dot(w) / length;
             if bound > best.0 {
                 best = (bound, v / length);
             }
-            let stalled = simplex.points().iter().any(|&p| (p - w).length_squared() <= 1e-24 * length * length);
-            if stalled || length - best.0 <= tolerance {
+            if simplex.holds(w, length) || length - best.0 <= tolerance {
                 break;
             }
             simplex.push(w);
@@ -184,7 +193,7 @@ pub fn separation(a: Shape, b: Shape, tolerance: Scalar, ends: &mut [u32; 2]) ->
             }
         }
     }
-    *ends = [sa, sb];
+    *ends = walks.ends;
     best
 }
 
