@@ -84,10 +84,15 @@ pub fn box_contact_axis(a: &BoxAt, b: &BoxAt, (margin, reach): (Scalar, Scalar))
                 continue;
             }
             // Along a_i × b_j, A reaches over its other two axes and B over its.
-            let reach = ha[i1] * cos[i2][j] + ha[i2] * cos[i1][j] + (hb[j1] * cos[i][j2] + hb[j2] * cos[i][j1]);
+            let reach_a = ha[i1] * cos[i2][j] + ha[i2] * cos[i1][j];
+            let reach_b = hb[j1] * cos[i][j2] + hb[j2] * cos[i][j1];
             let length = length2.sqrt();
             let along = d.dot(c);
-            consider((along.abs() - reach) / length, Found::Edges(i, j, along < 0.0, length), PREFER * margin);
+            consider(
+                (along.abs() - reach_a - reach_b) / length,
+                Found::Edges(i, j, along < 0.0, length),
+                PREFER * margin,
+            );
         }
     }
     let (separation, found) = best;
