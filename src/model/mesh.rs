@@ -398,7 +398,6 @@ fn check_convex(vertices: &[Vector], planes: &[Plane], size: Scalar) -> Result<(
     Ok(())
 }
 
-/// `Some(h)` when the vertices are exactly the 8 corners (±h.x, ±h.y, ±h.z).
 /// A box's faces and edge directions by body axis (`ConvexMesh::box_layout`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BoxLayout {
@@ -422,6 +421,7 @@ impl BoxLayout {
     }
 }
 
+/// `Some(h)` when the vertices are exactly the 8 corners (±h.x, ±h.y, ±h.z).
 fn cuboid_half_extents(vertices: &[Vector]) -> Option<Vector> {
     let h = vertices.first()?.abs();
     let corner = |v: &Vector| (v.abs() - h).abs().max_element() <= 1e-12 * h.max_element();
