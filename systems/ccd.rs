@@ -13,7 +13,7 @@
 
 use crate::collision::manifold::ClipScratch;
 use crate::collision::posed::Posed;
-use crate::collision::toi::{Approach, box_time_of_impact, impact_contact, placed_time_of_impact, time_of_impact};
+use crate::collision::toi::{Approach, impact_contact, meshes_time_of_impact};
 use crate::math::{Mat3, Scalar, Vector, exp_map};
 use crate::model::components::{ActorIndex, Pose};
 use crate::model::mesh::{MeshId, MeshTable};
@@ -355,17 +355,8 @@ fn next_impact(ctx: &StepContext, s: &CcdScratch, k: usize) -> Option<Scalar> {
     }
     let approach = Approach { relative_velocity: pa.v - pb.v, spin };
     let gap = IMPACT_GAP * b.thinner(&ctx.meshes, ia, ib);
-    let place = |t| (pa.at(t), pb.at(t));
-    let (ma, mc) = (ctx.meshes.get(b.mesh[ia]), ctx.meshes.get(b.mesh[ib]));
-    if ma.box_layout.is_some() && mc.box_layout.is_some() {
-        return box_time_of_impact((ma, mc), place, &approach, (start, dt), gap);
-    }
-    if ma.is_many_faced() || mc.is_many_faced() {
-        return placed_time_of_impact((ma, mc), place, &approach, (start, dt), gap);
-    }
-    let posed = |i: usize, p: &Path| Posed::new(ctx.meshes.get_arc(b.mesh[i]), &p.at(start));
-    let (mut a, mut c) = (posed(ia, &pa), posed(ib, &pb));
-    time_of_impact((&mut a, &mut c), place, &approach, (start, dt), gap)
+    let meshes = (ctx.meshes.get_arc(b.mesh[ia]), ctx.meshes.get_arc(b.mesh[ib]));
+    meshes_time_of_impact((&meshes.0, &meshes.1), |t| (pa.at(t), pb.at(t)), &approach, (start, dt), gap)
 }
 
 /// The impact of bodies `ia < ib`, both flown to its time: the corrected impulse (§2.5) with

@@ -165,7 +165,7 @@ pub fn distance_bound_from(a: Shape, b: Shape, enough: Scalar, starts: Option<[u
 /// within `tolerance` [m] of the distance it closes in on: that separation [m] (0 when they
 /// touch or overlap) and the axis, a unit vector from B to A. Any such axis is a separating
 /// axis, so the separation bounds the distance from below (conservative advancement,
-/// `toi::placed_time_of_impact`). `ends` holds where the support walks start and is left
+/// `toi::meshes_time_of_impact`). `ends` holds where the support walks start and is left
 /// where they ended: the next call, at nearby poses, starts there.
 #[must_use]
 pub fn separation(a: Shape, b: Shape, tolerance: Scalar, ends: &mut [u32; 2]) -> (Scalar, Vector) {

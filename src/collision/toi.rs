@@ -16,6 +16,7 @@ use crate::collision::posed::Posed;
 use crate::math::{Mat3, Scalar, Vector};
 use crate::model::components::Pose;
 use crate::model::mesh::ConvexMesh;
+use std::sync::Arc;
 
 /// Most advances per pair and query. Each closes a fixed share of the gap when spin dominates
 /// the bound; a query that runs out reports the (safe) time it reached as the impact.
@@ -70,44 +71,40 @@ pub fn time_of_impact(
     advance(axis_at, approach, window, gap)
 }
 
-/// `time_of_impact` of two boxes, from their poses alone (`boxes::box_contact_axis`): nothing
-/// is posed at the times it tries.
-pub fn box_time_of_impact(
-    (a, b): (&ConvexMesh, &ConvexMesh),
+/// `time_of_impact` of two meshes given their poses (`place`), posing only what the pair
+/// needs: two boxes' best axis from the poses alone (`boxes::box_contact_axis`); a pair with a
+/// many-faced body advances on GJK's separating axis (`gjk::separation`), walking the meshes'
+/// body-frame vertices from the last advance's; any other pair is posed and searched.
+pub fn meshes_time_of_impact(
+    (a, b): (&Arc<ConvexMesh>, &Arc<ConvexMesh>),
     place: impl Fn(Scalar) -> (Pose, Pose),
     approach: &Approach,
     window: (Scalar, Scalar),
     gap: Scalar,
 ) -> Option<Scalar> {
-    let axis_at = |t: Scalar| {
-        let (pa, pb) = place(t);
-        let (a, b) = (BoxAt::new(a, &pa)?, BoxAt::new(b, &pb)?);
-        box_contact_axis(&a, &b, (0.0, Scalar::INFINITY))
-    };
-    advance(axis_at, approach, window, gap)
-}
-
-/// `time_of_impact` of a pair with a many-faced body, from the poses alone: at each time it
-/// tries, GJK's separating axis (`gjk::separation`) walking the meshes' body-frame vertices,
-/// instead of posing both meshes and searching their faces.
-pub fn placed_time_of_impact(
-    (a, b): (&ConvexMesh, &ConvexMesh),
-    place: impl Fn(Scalar) -> (Pose, Pose),
-    approach: &Approach,
-    window: (Scalar, Scalar),
-    gap: Scalar,
-) -> Option<Scalar> {
-    let mut ends = [0, 0];
-    let placed =
-        |mesh, pose: &Pose| Placed { mesh, position: pose.position, rotation: Mat3::from_quat(pose.orientation) };
-    let axis_at = |t: Scalar| {
-        let (pa, pb) = place(t);
-        let (a, b) = (Shape::Placed(placed(a, &pa)), Shape::Placed(placed(b, &pb)));
-        // Within the touching share of the gap, GJK's bound is as good as the distance.
-        let (separation, normal) = separation(a, b, TOUCHING * gap, &mut ends);
-        Some(Axis { normal, separation, reference: Reference::Edges })
-    };
-    advance(axis_at, approach, window, gap)
+    if a.box_layout.is_some() && b.box_layout.is_some() {
+        let axis_at = |t: Scalar| {
+            let (pa, pb) = place(t);
+            box_contact_axis(&BoxAt::new(a, &pa)?, &BoxAt::new(b, &pb)?, (0.0, Scalar::INFINITY))
+        };
+        return advance(axis_at, approach, window, gap);
+    }
+    if a.is_many_faced() || b.is_many_faced() {
+        let mut ends = [0, 0];
+        let placed =
+            |mesh, pose: &Pose| Placed { mesh, position: pose.position, rotation: Mat3::from_quat(pose.orientation) };
+        let axis_at = |t: Scalar| {
+            let (pa, pb) = place(t);
+            let (a, b) = (Shape::Placed(placed(a, &pa)), Shape::Placed(placed(b, &pb)));
+            // Within the touching share of the gap, GJK's bound is as good as the distance.
+            let (separation, normal) = separation(a, b, TOUCHING * gap, &mut ends);
+            Some(Axis { normal, separation, reference: Reference::Edges })
+        };
+        return advance(axis_at, approach, window, gap);
+    }
+    let (pa, pb) = place(window.0);
+    let (mut a, mut b) = (Posed::new(a.clone(), &pa), Posed::new(b.clone(), &pb));
+    time_of_impact((&mut a, &mut b), place, approach, window, gap)
 }
 
 /// Conservative advancement with `axis_at(t)`, the pair's best axis at time t.
@@ -176,8 +173,8 @@ mod tests {
         let t = time_of_impact((&mut a, &mut b), place, &approach, (0.0, 1.0), 0.005).expect("they meet");
         assert!((t - (2.0 - 0.005) / 10.0).abs() < 1e-12, "{t}");
         // From the poses alone, the same time.
-        let cube = ConvexMesh::cuboid(Vector::ONE);
-        assert_eq!(box_time_of_impact((&cube, &cube), place, &approach, (0.0, 1.0), 0.005), Some(t));
+        let cube = Arc::new(ConvexMesh::cuboid(Vector::ONE));
+        assert_eq!(meshes_time_of_impact((&cube, &cube), place, &approach, (0.0, 1.0), 0.005), Some(t));
         // Too slow to meet within the step, or moving apart: none.
         assert_eq!(time_of_impact((&mut a, &mut b), place, &approach, (0.0, 0.1), 0.005), None);
         let away = Approach { relative_velocity: Vector::new(-10.0, 0.0, 0.0), spin: 0.0 };
@@ -202,7 +199,7 @@ mod tests {
         let gap = 0.005;
         let (mut a, mut b) = (Posed::new(ball.clone(), &at(0.0)), Posed::new(cube.clone(), &place(0.0).1));
         let posed = time_of_impact((&mut a, &mut b), place, &approach, (0.0, 1.0), gap).expect("they meet");
-        let placed = placed_time_of_impact((&ball, &cube), place, &approach, (0.0, 1.0), gap).expect("they meet");
+        let placed = meshes_time_of_impact((&ball, &cube), place, &approach, (0.0, 1.0), gap).expect("they meet");
         let (pa, pb) = place(placed);
         a.update(&pa);
         b.update(&pb);
