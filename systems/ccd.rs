@@ -5,7 +5,7 @@
 //! (`collision::toi`), given the corrected impulse of §2.5 (with the pair's restitution, and
 //! Coulomb friction) there, and flies on. Impacts are taken earliest first, so chains within a
 //! step come out in order. A body that used up its impacts (squeezed) ends the squeeze with
-//! one inelastic impulse over its contacts (`squeeze`).
+//! the impulses of all its contacts solved at once, with restitution (`squeeze`).
 //!
 //! The bodies it moves are left at their last impact, with the time they have flown:
 //! `integrate` moves them through the rest of the step. When no body is that fast (every

@@ -1,7 +1,8 @@
 //! The end of a squeeze (docs/physics.md §6.7): a body that used up its impacts in a step, a
 //! light one between a wall and a heavy body closing on it, would bounce on without end. Its
 //! contacts with every body it could still reach in the step take their impulses together,
-//! frictionless, exact and inelastic; it flies on, unswept, approaching none of them.
+//! frictionless and exact, with the pairs' restitution where that makes no energy; it flies
+//! on, unswept, approaching none of them.
 
 use super::{CcdScratch, FAST_FRACTION, IMPACT_GAP, fly, path};
 use crate::collision::contact::Contact;
@@ -25,10 +26,11 @@ struct Touch {
 
 /// Ends the squeeze of free body `i`, which used up its impacts at time `t`: its contacts with
 /// the bodies it could reach in the rest of the step get the impulses, equal and opposite,
-/// that leave none of them approaching and none pulling (Signorini, solved exactly). Inelastic
-/// whatever the pairs' restitution: a bounce would hand the squeezed body the blow's energy
-/// again, and the squeeze would go on. Only when one of them closes fast: a slow one is the
-/// discrete tests'. Returns the partners it moved, flown to `t`.
+/// that leave none of them approaching and none pulling (Signorini, solved exactly), then the
+/// pairs' restitution on top (`restituted`), so an elastic gas keeps its energy and a heavy
+/// body closing on a wall through a light one bounces back, as e = 1 has it. Only when one of
+/// them closes fast: a slow one is the discrete tests'. Returns the partners it moved, flown
+/// to `t`.
 pub(super) fn squeeze(ctx: &mut StepContext, s: &mut CcdScratch, i: usize, t: Scalar) -> Vec<usize> {
     let touches = touches(ctx, s, i, t);
     // A contact closing slower than a fast pair (a resting pair that met eight times) is the
@@ -47,7 +49,10 @@ pub(super) fn squeeze(ctx: &mut StepContext, s: &mut CcdScratch, i: usize, t: Sc
     let (mut me, mut others): (BodyState, Vec<BodyState>) =
         (state(b, i), touches.iter().map(|k| state(b, k.j)).collect());
     let w0: Vec<Scalar> = touches.iter().zip(&others).map(|(k, o)| separating(&me, o, &k.contact)).collect();
-    let p = complementary(&response(&me, &others, &touches), &w0).unwrap_or_default();
+    let a = response(&me, &others, &touches);
+    let p = complementary(&a, &w0).unwrap_or_default();
+    let e: Vec<Scalar> = touches.iter().map(|k| 0.5 * (b.restitution[i] + b.restitution[k.j])).collect();
+    let p = restituted(&a, &w0, p, &e);
     for ((k, o), p) in touches.iter().zip(&mut others).zip(p).filter(|(_, p)| *p > 0.0) {
         me.apply_impulse(k.contact.point, p * k.contact.normal);
         o.apply_impulse(k.contact.point, -p * k.contact.normal);
@@ -95,6 +100,41 @@ fn touches(ctx: &StepContext, s: &mut CcdScratch, i: usize, t: Scalar) -> Vec<To
 /// How fast the body leaves partner `o` at the contact, `u_n` [m/s] (negative: approaching).
 fn separating(me: &BodyState, o: &BodyState, c: &Contact) -> Scalar {
     (me.point_velocity(c.point) - o.point_velocity(c.point)).dot(c.normal)
+}
+
+/// Rounds of restitution a squeeze's end takes at most (`restituted`); the last is inelastic.
+const RESTITUTION_ROUNDS: usize = 16;
+
+/// The pairs' restitution on top of the inelastic impulses `p` (parting speeds `w0` before,
+/// responses `a`, restitutions `e`), Poisson's way: each contact takes (1 + e) times the
+/// inelastic impulse; where that leaves a contact approaching, the inelastic impulses from
+/// there, again with restitution, round after round, the last inelastic. With one restitution
+/// for all contacts no round makes energy (e = 1 keeps it exactly, docs/physics.md §6.7); the
+/// result is kept only if it makes none, else `p` is.
+fn restituted(a: &[Vec<Scalar>], w0: &[Scalar], p: Vec<Scalar>, e: &[Scalar]) -> Vec<Scalar> {
+    let n = p.len();
+    let parting = |q: &[Scalar]| -> Vec<Scalar> {
+        (0..n).map(|k| w0[k] + (0..n).map(|l| a[k][l] * q[l]).sum::<Scalar>()).collect()
+    };
+    let (mut total, mut round, mut settled) = (vec![0.0; n], p.clone(), false);
+    for r in 1..=RESTITUTION_ROUNDS {
+        let bounce = |k: usize| if r < RESTITUTION_ROUNDS { 1.0 + e[k] } else { 1.0 };
+        (0..n).for_each(|k| total[k] += bounce(k) * round[k]);
+        // The inelastic impulses from here: none when no contact approaches.
+        match complementary(a, &parting(&total)) {
+            Some(q) if q.iter().all(|&q| q == 0.0) => {
+                settled = true;
+                break;
+            }
+            Some(q) => round = q,
+            None => break,
+        }
+    }
+    // The energy impulses P give is P·(w0 + w)/2, w the parting speeds after them.
+    let w = parting(&total);
+    let gain: Scalar = (0..n).map(|k| total[k] * (w0[k] + w[k])).sum::<Scalar>() / 2.0;
+    let scale: Scalar = (0..n).map(|k| (total[k] * w0[k]).abs()).sum();
+    if settled && gain <= 1e-12 * scale { total } else { p }
 }
 
 /// `A[k][l]`: how much a unit impulse at contact l speeds up the parting at contact k.
@@ -182,5 +222,37 @@ mod tests {
         let a = [vec![100.0, -100.0], vec![-100.0, 100.0]];
         let p = complementary(&a, &[-100.0, 100.0]).expect("a solution");
         assert_eq!(p, vec![1.0, 0.0]);
+    }
+
+    /// The parting speeds after impulses `p` and the energy they gave, P·(w0 + w)/2.
+    fn after(a: &[Vec<Scalar>], w0: &[Scalar], p: &[Scalar]) -> (Vec<Scalar>, Scalar) {
+        let w: Vec<Scalar> = (0..w0.len()).map(|k| w0[k] + (0..p.len()).map(|l| a[k][l] * p[l]).sum::<Scalar>()).collect();
+        let gain = (0..w0.len()).map(|k| p[k] * (w0[k] + w[k])).sum::<Scalar>() / 2.0;
+        (w, gain)
+    }
+
+    #[test]
+    fn one_contact_parts_at_e_times_its_approach() {
+        for e in [0.0, 0.5, 1.0] {
+            let p = restituted(&[vec![2.0]], &[-3.0], vec![1.5], &[e]);
+            assert_eq!(after(&[vec![2.0]], &[-3.0], &p).0, vec![3.0 * e], "e = {e}");
+        }
+    }
+
+    /// The cubes of the first test with e = 1: no contact approaches after, and the energy of
+    /// the approach (50 J of the light cube's, 50 J of the heavy one's) is all kept.
+    #[test]
+    fn an_elastic_squeeze_keeps_its_energy_and_leaves_no_contact_approaching() {
+        let (m, big) = (0.01, 1.0);
+        let a = [vec![1.0 / m, -1.0 / m], vec![-1.0 / m, 1.0 / m + 1.0 / big]];
+        let w0 = [-100.0, 90.0];
+        let p = complementary(&a, &w0).expect("a solution");
+        let elastic = restituted(&a, &w0, p.clone(), &[1.0, 1.0]);
+        let (w, gain) = after(&a, &w0, &elastic);
+        assert!(w.iter().all(|&w| w >= 0.0), "{w:?}");
+        assert!(gain.abs() <= 1e-12 * 100.0, "energy changed by {gain} J");
+        // Inelastic pairs take the inelastic impulses themselves, which stop both cubes.
+        assert_eq!(restituted(&a, &w0, p.clone(), &[0.0, 0.0]), p);
+        assert!((after(&a, &w0, &p).1 + 100.0).abs() < 1e-9);
     }
 }
