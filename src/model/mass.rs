@@ -96,6 +96,26 @@ pub fn principal_axes(inertia: Mat3) -> (Vector, Mat3) {
     (moments, v)
 }
 
+/// Differences between principal moments below this fraction of the largest are round-off of
+/// the integrals: a geodesic sphere is isotropic by its symmetry, yet its computed moments
+/// differ in the 16th digit.
+const ISOTROPIC_TOLERANCE: Scalar = 1e-12;
+
+/// `inertia` as the exact isotropic tensor (the mean moment on the diagonal) when its principal
+/// moments agree to round-off but not bit for bit, else unchanged. Such a body then turns by
+/// the exact isotropic rotation instead of the splitting's five (docs/physics.md §2.7), as a
+/// sphere should; moments already equal (a cube's) or really different keep their bits.
+#[must_use]
+pub fn isotropic_to_round_off(inertia: Mat3) -> Mat3 {
+    let (moments, _) = principal_axes(inertia);
+    let (lo, hi) = (moments.min_element(), moments.max_element());
+    if lo != hi && hi > 0.0 && hi - lo <= ISOTROPIC_TOLERANCE * hi {
+        Mat3::from_diagonal(Vector::splat(moments.element_sum() / 3.0))
+    } else {
+        inertia
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -159,5 +179,29 @@ mod tests {
         let rebuilt = axes * Mat3::from_diagonal(moments) * axes.transpose();
         assert!(close(rebuilt, p.inertia * 6.0, 1e-15));
         assert!((axes.determinant() - 1.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn an_icosphere_is_isotropic_to_the_bit_and_boxes_keep_their_integrals() {
+        use crate::model::shapes::{box_raw, icosphere_raw};
+        for subdivisions in 1..=3 {
+            let (v, t) = icosphere_raw(0.5, subdivisions);
+            let raw = volume_props(&v, &t).inertia;
+            let (moments, _) = principal_axes(raw);
+            assert_ne!(moments.min_element(), moments.max_element(), "the integrals' round-off this test is about");
+            let snapped = isotropic_to_round_off(raw);
+            let mean = moments.element_sum() / 3.0;
+            assert_eq!(snapped, Mat3::from_diagonal(Vector::splat(mean)), "S = {subdivisions}");
+            assert!(close(snapped, raw, 1e-15 * mean), "S = {subdivisions}: {snapped:?} against {raw:?}");
+            // The scaled tensor is isotropic to the bit too, so the body takes the exact rotation.
+            let (scaled, axes) = principal_axes(snapped * 2.7);
+            assert!(scaled.x == scaled.y && scaled.y == scaled.z && axes == Mat3::IDENTITY, "{scaled:?}");
+        }
+        // A cube's moments are equal bit for bit already, a brick's differ for real: untouched.
+        for size in [Vector::splat(1.0), Vector::new(1.0, 2.0, 3.0), Vector::new(1.0, 1.0, 1.0 + 1e-9)] {
+            let (v, t) = box_raw(size);
+            let raw = volume_props(&v, &t).inertia;
+            assert_eq!(isotropic_to_round_off(raw), raw, "{size}");
+        }
     }
 }

@@ -7,7 +7,7 @@
 
 use crate::error::MeshError;
 use crate::math::{Mat3, Scalar, Vector};
-use crate::model::mass::{VolumeProps, volume_props};
+use crate::model::mass::{VolumeProps, isotropic_to_round_off, volume_props};
 use std::collections::{HashMap, VecDeque};
 
 /// Slack for convexity [fraction of the mesh size]: a vertex may stand this far in front of a
@@ -61,7 +61,8 @@ pub struct ConvexMesh {
     pub thickness: Scalar,
     /// Volume [m³].
     pub volume: Scalar,
-    /// Inertia about the centre of mass at density 1 [kg·m² per kg/m³].
+    /// Inertia about the centre of mass at density 1 [kg·m² per kg/m³]; exactly isotropic when
+    /// its moments agree to round-off (`mass::isotropic_to_round_off`).
     pub unit_inertia: Mat3,
     /// Half extents when the mesh is a box aligned with its body axes (its 8 vertices are
     /// (±x, ±y, ±z)): pairs of such boxes get the cheap oriented-box separation test.
@@ -187,7 +188,7 @@ impl ConvexMesh {
             radius,
             thickness,
             volume: props.volume,
-            unit_inertia: props.inertia,
+            unit_inertia: isotropic_to_round_off(props.inertia),
         };
         Ok((mesh, props.centroid))
     }
