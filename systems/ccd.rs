@@ -278,35 +278,53 @@ fn impacts(ctx: &mut StepContext, s: &mut CcdScratch, speed: Scalar) {
 
 /// How a body moves through the step: from `pose` at time `t0`, its centre at `v`, turning at
 /// `w` (`exp(w·t)`), so no point moves faster than `|v| + |w| ρ`, the bound the time of impact
-/// rests on.
+/// rests on. After an impact an unequal-moment body turns freely instead (`free`: its
+/// principal axes and moments), as `integrate` turns it: its angular momentum and energy kept,
+/// its ω precessing, never faster than |L| / I_min.
 #[derive(Clone, Copy, Debug)]
 struct Path {
     t0: Scalar,
     pose: Pose,
     v: Vector,
     w: Vector,
+    free: Option<(crate::math::Quat, Vector)>,
 }
 
 impl Path {
     fn at(&self, t: Scalar) -> Pose {
         let h = t - self.t0;
-        Pose {
-            position: self.pose.position + self.v * h,
-            orientation: (exp_map(self.w * h) * self.pose.orientation).normalize(),
+        let orientation = match self.free {
+            Some((axes, moments)) => rotate_free(self.pose.orientation, self.w, axes, moments, h).0,
+            None => (exp_map(self.w * h) * self.pose.orientation).normalize(),
+        };
+        Pose { position: self.pose.position + self.v * h, orientation }
+    }
+
+    /// The fastest the body turns along the path [rad/s].
+    fn spin(&self) -> Scalar {
+        match self.free {
+            Some((axes, moments)) => {
+                let q = self.pose.orientation * axes;
+                (moments * (q.inverse() * self.w)).length() / moments.min_element()
+            }
+            None => self.w.length(),
         }
     }
 }
 
 /// Body `i`'s path: a fixed body stays; one that had an impact flies on from it at its
-/// velocities; any other goes from where it began the step to where `integrate` will put it,
-/// straight and at one rate of turn, which is the path `solve`'s and `correct`'s moves imply.
+/// velocities, turning freely; any other goes from where it began the step to where
+/// `integrate` will put it, straight and at one rate of turn, which is the path `solve`'s and
+/// `correct`'s moves imply.
 fn path(b: &Bodies, s: &CcdScratch, dt: Scalar, i: usize) -> Path {
     let here = Pose { position: b.position[i], orientation: b.orientation[i] };
     if b.inv_mass[i] == 0.0 {
-        return Path { t0: 0.0, pose: here, v: Vector::ZERO, w: Vector::ZERO };
+        return Path { t0: 0.0, pose: here, v: Vector::ZERO, w: Vector::ZERO, free: None };
     }
     if s.flown[i] {
-        return Path { t0: s.taken[i], pose: here, v: b.velocity[i], w: b.angular_velocity[i] };
+        let m = b.principal_moments[i];
+        let free = (!(m.x == m.y && m.y == m.z)).then_some((b.principal_axes[i], m));
+        return Path { t0: s.taken[i], pose: here, v: b.velocity[i], w: b.angular_velocity[i], free };
     }
     let start = s.start[i];
     let (end, _) =
@@ -314,7 +332,7 @@ fn path(b: &Bodies, s: &CcdScratch, dt: Scalar, i: usize) -> Path {
     let turn = end * start.orientation.inverse();
     let turn = if turn.w < 0.0 { -turn } else { turn };
     let v = (here.position + b.velocity[i] * dt - start.position) / dt;
-    Path { t0: 0.0, pose: start, v, w: turn.to_scaled_axis() / dt }
+    Path { t0: 0.0, pose: start, v, w: turn.to_scaled_axis() / dt, free: None }
 }
 
 /// Moves free body `i` along its path to time `t` of the step. On a free flight its world
@@ -324,12 +342,11 @@ fn fly(ctx: &mut StepContext, s: &mut CcdScratch, i: usize, t: Scalar) {
     if b.inv_mass[i] == 0.0 || (s.flown[i] && t <= s.taken[i]) {
         return;
     }
-    let pose = path(b, s, ctx.dt, i).at(t);
-    let moments = b.principal_moments[i];
-    if s.flown[i] && !(moments.x == moments.y && moments.y == moments.z) {
-        let (before, after) = (b.orientation[i] * b.principal_axes[i], pose.orientation * b.principal_axes[i]);
-        let l = before * (moments * (before.inverse() * b.angular_velocity[i]));
-        b.angular_velocity[i] = after * ((after.inverse() * l) / moments);
+    let way = path(b, s, ctx.dt, i);
+    let pose = way.at(t);
+    if let Some((axes, moments)) = way.free {
+        // The free turn's ω at its end: L and the energy kept (docs/physics.md §2.7).
+        b.angular_velocity[i] = rotate_free(way.pose.orientation, way.w, axes, moments, t - way.t0).1;
     }
     (b.position[i], b.orientation[i]) = (pose.position, pose.orientation);
     b.rotation[i] = Mat3::from_quat(pose.orientation);
@@ -347,7 +364,7 @@ fn next_impact(ctx: &StepContext, s: &CcdScratch, k: usize) -> Option<Scalar> {
     }
     let (pa, pb) = (path(b, s, dt, ia), path(b, s, dt, ib));
     let start = pa.t0.max(pb.t0);
-    let spin = pa.w.length() * b.radius[ia] + pb.w.length() * b.radius[ib];
+    let spin = pa.spin() * b.radius[ia] + pb.spin() * b.radius[ib];
     // Bounding spheres that cannot meet within the step: no search needed.
     let apart = (pa.at(start).position - pb.at(start).position).length() - b.radius[ia] - b.radius[ib];
     if apart > ((pa.v - pb.v).length() + spin) * (dt - start) {
