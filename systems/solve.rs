@@ -22,7 +22,8 @@
 //! here alone.
 
 use crate::collision::contact::{Contact, Feature, Pair, PairState};
-use crate::collision::manifold::{ClipScratch, MAX_POINTS, Manifold, contact_axis_from, manifold, support_point};
+use crate::collision::hull::climbed_axis;
+use crate::collision::manifold::{ClipScratch, MAX_POINTS, Manifold, Reference, contact_axis_from, manifold, support_point};
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
@@ -136,9 +137,9 @@ fn find_manifolds(ctx: &mut StepContext) {
     ctx.posed.pose(b, fresh);
     let posed = &ctx.posed;
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
-    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter())).zip(cached.par_iter());
+    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter())).zip(cached.par_iter().zip(s.near.par_iter()));
     let rows = rows.filter(|((_, (_, r)), _)| !**r);
-    rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (anchors, _)), &entry)| {
+    rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (anchors, _)), (&entry, &near))| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
         let reach = reach(ia, ib, thin);
@@ -146,9 +147,15 @@ fn find_manifolds(ctx: &mut StepContext) {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
         // Held along the pair's least-overlap axis (see `contact_axis`), touching or a hair
         // apart (speculatively); the tests' own normal and depth decide only that it touches.
-        // Searched from last step's axis, if the pair was held then.
+        // Searched from last step's axis, if the pair was held then. A pair proved apart is
+        // held only speculatively: the face that axis climbs to will do (`climbed_axis`).
         let hint = cache.get(entry as usize).and_then(|e| e.1.anchors.axis);
-        let Some(axis) = contact_axis_from(pa, pb, (margin * thin, reach), hint) else {
+        let climbed = hint.and_then(Reference::face).filter(|_| near).and_then(|f| climbed_axis(pa, pb, f));
+        let axis = match climbed {
+            Some(x) => (x.separation <= reach).then_some(x),
+            None => contact_axis_from(pa, pb, (margin * thin, reach), hint),
+        };
+        let Some(axis) = axis else {
             m.len = 0;
             pair.state = PairState::Candidate; // apart: no constraint
             return;

@@ -684,6 +684,23 @@ pub fn contact_axis_hinted(
     })
 }
 
+/// An axis for a pair proved apart whose axis last step was face `f` of `hint` (A's when
+/// `of_a`): the climb of `contact_axis_hinted` over that body's faces, without the choice among
+/// the features around it. The face it ends at parts the bodies by its separation, so it is a
+/// separating axis, and the gap along it no more than their distance: what a speculative
+/// contact needs. `None` when the face does not part them (the full search decides).
+#[must_use]
+pub fn climbed_axis(a: &Posed, b: &Posed, (of_a, f): (bool, u32)) -> Option<Axis> {
+    let (q, p) = if of_a { (a, b) } else { (b, a) };
+    if f as usize >= q.plane_count() || !(is_many_faced(a) || is_many_faced(b)) {
+        return None;
+    }
+    let (face, _, separation) = climb(q, p, f);
+    let n = q.plane(face as usize).normal;
+    let (normal, reference) = if of_a { (-n, Reference::FaceOfA(face)) } else { (n, Reference::FaceOfB(face)) };
+    (separation > 0.0).then_some(Axis { normal, separation, reference })
+}
+
 /// From face `f` of `q`, the face of `q` along whose normal `p` lies farthest out, as far as
 /// moving to a better neighbour (a face sharing a vertex) reaches: (face, `p`'s vertex lowest
 /// along its normal, the separation). A small `q` has no climb: its faces are all tried.

@@ -206,6 +206,18 @@ pub enum Reference {
     Edges,
 }
 
+impl Reference {
+    /// The face it names, as (of A, plane index); `None` for an edge axis.
+    #[must_use]
+    pub fn face(self) -> Option<(bool, u32)> {
+        match self {
+            Self::FaceOfB(f) => Some((false, f)),
+            Self::FaceOfA(f) => Some((true, f)),
+            Self::Edges => None,
+        }
+    }
+}
+
 /// A face of A is preferred to one of B, and an edge axis to a face, only when it separates
 /// the pair by more than this fraction of the margin: near-ties then keep one choice from
 /// step to step instead of flickering between parallel faces.
@@ -236,12 +248,7 @@ pub fn contact_axis_from(
     (margin, reach): (Scalar, Scalar),
     hint: Option<Reference>,
 ) -> Option<Axis> {
-    let face = match hint {
-        Some(Reference::FaceOfB(f)) => Some((false, f)),
-        Some(Reference::FaceOfA(f)) => Some((true, f)),
-        Some(Reference::Edges) | None => None,
-    };
-    match face.filter(|_| is_many_faced(a) || is_many_faced(b)) {
+    match hint.and_then(Reference::face).filter(|_| is_many_faced(a) || is_many_faced(b)) {
         Some(face) => contact_axis_hinted(a, b, (margin, reach), face),
         None => contact_axis(a, b, (margin, reach)),
     }
