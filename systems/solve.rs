@@ -23,7 +23,9 @@
 
 use crate::collision::contact::{Contact, Feature, Pair, PairState};
 use crate::collision::hull::climbed_axis;
-use crate::collision::manifold::{ClipScratch, MAX_POINTS, Manifold, Reference, contact_axis_from, manifold, support_point};
+use crate::collision::manifold::{
+    ClipScratch, MAX_POINTS, Manifold, Reference, contact_axis_from, manifold, support_point,
+};
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
@@ -137,7 +139,8 @@ fn find_manifolds(ctx: &mut StepContext) {
     ctx.posed.pose(b, fresh);
     let posed = &ctx.posed;
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
-    let rows = rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter())).zip(cached.par_iter().zip(s.near.par_iter()));
+    let rows =
+        rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter())).zip(cached.par_iter().zip(s.near.par_iter()));
     let rows = rows.filter(|((_, (_, r)), _)| !**r);
     rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (anchors, _)), (&entry, &near))| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);

@@ -226,7 +226,8 @@ mod tests {
 
     /// The parting speeds after impulses `p` and the energy they gave, P·(w0 + w)/2.
     fn after(a: &[Vec<Scalar>], w0: &[Scalar], p: &[Scalar]) -> (Vec<Scalar>, Scalar) {
-        let w: Vec<Scalar> = (0..w0.len()).map(|k| w0[k] + (0..p.len()).map(|l| a[k][l] * p[l]).sum::<Scalar>()).collect();
+        let w: Vec<Scalar> =
+            (0..w0.len()).map(|k| w0[k] + (0..p.len()).map(|l| a[k][l] * p[l]).sum::<Scalar>()).collect();
         let gain = (0..w0.len()).map(|k| p[k] * (w0[k] + w[k])).sum::<Scalar>() / 2.0;
         (w, gain)
     }
