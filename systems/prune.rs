@@ -239,8 +239,9 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
     let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
     ctx.posed.pose(b, candidates.clone().filter(|&i| !many(i)));
-    let PruneScratch { wanted, bounds, hints, starts, next, starts_out, cached, .. } =
+    let PruneScratch { wanted, bounds, hints, starts, next, starts_out, cached, resting, .. } =
         ctx.scratch.get_mut::<PruneScratch>();
+    cache_entries(&touching, &ctx.pairs, resting);
     // Each pair's GJK starts from where last step's first walks ended (its entry in `starts`;
     // `cached` is scratch here, `take_recycled` fills it afresh).
     cache_entries(starts, &ctx.pairs, cached);
@@ -265,15 +266,16 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let shape = |i: u32| if many(i) { Shape::Placed(placed(i as usize)) } else { Shape::Posed(posed.get(i)) };
     let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };
     let old = |e: u32| starts.get(e as usize).map(|s| &s.1);
-    let rows = ctx.pairs.par_iter_mut().zip(cached.par_iter().zip(starts_out.par_iter_mut()));
-    rows.filter(|(p, _)| p.is_candidate() && !(is_box(p.a) && is_box(p.b))).for_each(|(pair, (&entry, out))| {
+    let rows = ctx.pairs.par_iter_mut().zip(cached.par_iter().zip(starts_out.par_iter_mut())).zip(resting.par_iter());
+    let rows = rows.filter(|((p, _), _)| p.is_candidate() && !(is_box(p.a) && is_box(p.b)));
+    rows.for_each(|((pair, (&entry, out)), &resting)| {
         let kept = old(entry);
         let (ia, ib) = (pair.a, pair.b);
         // An actor index may name another mesh after a structural change: such starts go.
         let size = |i: u32| meshes.get(b.mesh[i as usize]).vertices.len();
         let from = kept.map(|k| k.ends).filter(|&[i, j]| (i as usize) < size(ia) && (j as usize) < size(ib));
         let apart = kept.and_then(|k| k.apart);
-        let (resting, first) = (touching.binary_search(&(ia, ib)).is_ok(), u64::from(ia));
+        let (resting, first) = (resting != u32::MAX, u64::from(ia));
         classify(pair, margin(pair), |[wide, proof]| {
             if many(ia) || many(ib) {
                 let gap = gap_between(bounds_of(ia), bounds_of(ib));
@@ -306,7 +308,7 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     ctx.pairs.retain(|p| p.state != PairState::Separated);
     touching.clear();
     let touches = |p: &&Pair| p.is_candidate() && (many(p.a) || many(p.b));
-    touching.extend(ctx.pairs.iter().filter(touches).map(|p| (p.a, p.b)));
+    touching.extend(ctx.pairs.iter().filter(touches).map(|p| ((p.a, p.b), ())));
     let scratch = ctx.scratch.get_mut::<PruneScratch>();
     (scratch.speculative, scratch.touching) = (speculative, touching);
     if judged {
@@ -406,8 +408,11 @@ struct PruneScratch {
     /// Each body's speculative distance (`Params::speculative_distances`), found afresh each
     /// step.
     speculative: Vec<Scalar>,
-    /// The pairs with a many-faced body not proved apart last step, sorted.
-    touching: Vec<(u32, u32)>,
+    /// The pairs with a many-faced body not proved apart last step, sorted (with nothing
+    /// beside them: a per-pair list `cache_entries` merges with the pairs).
+    touching: Vec<((u32, u32), ())>,
+    /// Scratch: each pair's index in `touching` (`u32::MAX`: not there).
+    resting: Vec<u32>,
     /// Scratch of `take_recycled`: each pair's index in `solve`'s cache (`u32::MAX`: none).
     cached: Vec<u32>,
     /// Scratch: body i is a many-faced body of a candidate pair.
