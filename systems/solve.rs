@@ -163,9 +163,12 @@ fn find_manifolds(ctx: &mut StepContext) {
             pair.state = PairState::Candidate; // apart: no constraint
             return;
         };
-        let point = support_point(pa, pb, &axis);
-        pair.state = PairState::Resolved(Contact { point, normal: axis.normal, depth: -axis.separation, feature });
         *m = manifold(pa, pb, &axis, reach, scratch);
+        // A pair held only speculatively is held at its deepest point, as a recycled one is;
+        // the support point is needed where the clipping left none.
+        let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y])).filter(|_| climbed.is_some());
+        let point = deepest.map_or_else(|| support_point(pa, pb, &axis), |k| m.points[k]);
+        pair.state = PairState::Resolved(Contact { point, normal: axis.normal, depth: -axis.separation, feature });
         if m.len == 0 {
             // Edge across edge, or nothing left by the clipping: one point where they meet.
             (m.points[0], m.gaps[0], m.len) = (point, axis.separation, 1);
