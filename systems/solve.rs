@@ -164,15 +164,14 @@ fn find_manifolds(ctx: &mut StepContext) {
             return;
         };
         *m = manifold(pa, pb, &axis, reach, scratch);
-        // A pair held only speculatively is held at its deepest point, as a recycled one is;
-        // the support point is needed where the clipping left none.
-        let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y])).filter(|_| climbed.is_some());
-        let point = deepest.map_or_else(|| support_point(pa, pb, &axis), |k| m.points[k]);
-        pair.state = PairState::Resolved(Contact { point, normal: axis.normal, depth: -axis.separation, feature });
         if m.len == 0 {
             // Edge across edge, or nothing left by the clipping: one point where they meet.
-            (m.points[0], m.gaps[0], m.len) = (point, axis.separation, 1);
+            (m.points[0], m.gaps[0], m.len) = (support_point(pa, pb, &axis), axis.separation, 1);
         }
+        // Held at its deepest point, as a recycled pair is (`held_at`).
+        let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y])).unwrap_or(0);
+        let contact = Contact { point: m.points[deepest], normal: axis.normal, depth: -axis.separation, feature };
+        pair.state = PairState::Resolved(contact);
         *anchors = ContactAnchors { axis: Some(axis.reference), ..fixed_to_bodies(m, axis.normal, b, ia, ib) };
     });
 }
