@@ -150,8 +150,9 @@ fn find_manifolds(ctx: &mut StepContext) {
         let (pa, pb) = (posed.get(pair.a), posed.get(pair.b));
         // Held along the pair's least-overlap axis (see `contact_axis`), touching or a hair
         // apart (speculatively); the tests' own normal and depth decide only that it touches.
-        // Searched from last step's axis, if the pair was held then. A pair proved apart is
-        // held only speculatively: the face that axis climbs to will do (`climbed_axis`).
+        // Searched from last step's axis, if the pair was held then. A pair no test found
+        // touching is held only speculatively: if the face that axis climbs to parts the
+        // bodies, it will do (`climbed_axis`).
         let hint = cache.get(entry as usize).and_then(|e| e.1.anchors.axis);
         let climbed = hint.and_then(Reference::face).filter(|_| near).and_then(|f| climbed_axis(pa, pb, f));
         let axis = match climbed {

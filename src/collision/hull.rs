@@ -684,8 +684,8 @@ pub fn contact_axis_hinted(
     })
 }
 
-/// An axis for a pair proved apart whose axis last step was face `f` of `hint` (A's when
-/// `of_a`): the climb of `contact_axis_hinted` over that body's faces, without the choice among
+/// An axis for a pair no test found touching whose axis last step was face `f` (A's when
+/// `of_a`, else B's): the climb of `contact_axis_hinted` over that body's faces, without the choice among
 /// the features around it. The face it ends at parts the bodies by its separation, so it is a
 /// separating axis, and the gap along it no more than their distance: what a speculative
 /// contact needs. `None` when the face does not part them (the full search decides).
