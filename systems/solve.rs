@@ -170,7 +170,7 @@ fn find_manifolds(ctx: &mut StepContext) {
             (m.points[0], m.gaps[0], m.len) = (support_point(pa, pb, &axis), axis.separation, 1);
         }
         // Held at its deepest point, as a recycled pair is (`held_at`).
-        let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y])).unwrap_or(0);
+        let deepest = m.deepest().unwrap_or(0);
         let contact = Contact { point: m.points[deepest], normal: axis.normal, depth: -axis.separation, feature };
         pair.state = PairState::Resolved(contact);
         *anchors = ContactAnchors { axis: Some(axis.reference), ..fixed_to_bodies(m, axis.normal, b, ia, ib) };
@@ -226,7 +226,7 @@ pub(super) fn recycled_contact(
 
 /// `recycled_contact` given the kept normal turned with A.
 fn held_at(m: &Manifold, normal: Vector, feature: Feature) -> Option<Contact> {
-    let deepest = (0..m.len).min_by(|&x, &y| m.gaps[x].total_cmp(&m.gaps[y]))?;
+    let deepest = m.deepest()?;
     Some(Contact { point: m.points[deepest], normal, depth: -m.gaps[deepest], feature })
 }
 

@@ -29,6 +29,12 @@ impl Manifold {
     pub fn points(&self) -> &[Vector] {
         &self.points[..self.len]
     }
+
+    /// The index of the deepest point (least gap), `None` when there is none.
+    #[must_use]
+    pub fn deepest(&self) -> Option<usize> {
+        (0..self.len).min_by(|&x, &y| self.gaps[x].total_cmp(&self.gaps[y]))
+    }
 }
 
 /// Below this distance [fraction of the smaller radius] two candidate points are one.
