@@ -113,15 +113,12 @@ const RESTITUTION_ROUNDS: usize = 16;
 /// result is kept only if it makes none, else `p` is.
 fn restituted(a: &[Vec<Scalar>], w0: &[Scalar], p: Vec<Scalar>, e: &[Scalar]) -> Vec<Scalar> {
     let n = p.len();
-    let parting = |q: &[Scalar]| -> Vec<Scalar> {
-        (0..n).map(|k| w0[k] + (0..n).map(|l| a[k][l] * q[l]).sum::<Scalar>()).collect()
-    };
     let (mut total, mut round, mut settled) = (vec![0.0; n], p.clone(), false);
     for r in 1..=RESTITUTION_ROUNDS {
         let bounce = |k: usize| if r < RESTITUTION_ROUNDS { 1.0 + e[k] } else { 1.0 };
         (0..n).for_each(|k| total[k] += bounce(k) * round[k]);
         // The inelastic impulses from here: none when no contact approaches.
-        match complementary(a, &parting(&total)) {
+        match complementary(a, &parting(a, w0, &total)) {
             Some(q) if q.iter().all(|&q| q == 0.0) => {
                 settled = true;
                 break;
@@ -130,11 +127,19 @@ fn restituted(a: &[Vec<Scalar>], w0: &[Scalar], p: Vec<Scalar>, e: &[Scalar]) ->
             None => break,
         }
     }
-    // The energy impulses P give is P·(w0 + w)/2, w the parting speeds after them.
-    let w = parting(&total);
-    let gain: Scalar = (0..n).map(|k| total[k] * (w0[k] + w[k])).sum::<Scalar>() / 2.0;
+    let gain = energy_given(&total, w0, &parting(a, w0, &total));
     let scale: Scalar = (0..n).map(|k| (total[k] * w0[k]).abs()).sum();
     if settled && gain <= 1e-12 * scale { total } else { p }
+}
+
+/// The parting speeds `w = A p + w0` after impulses `p`.
+fn parting(a: &[Vec<Scalar>], w0: &[Scalar], p: &[Scalar]) -> Vec<Scalar> {
+    (0..w0.len()).map(|k| w0[k] + (0..p.len()).map(|l| a[k][l] * p[l]).sum::<Scalar>()).collect()
+}
+
+/// The energy impulses `p` give, p·(w0 + w)/2, `w` the parting speeds after them.
+fn energy_given(p: &[Scalar], w0: &[Scalar], w: &[Scalar]) -> Scalar {
+    (0..p.len()).map(|k| p[k] * (w0[k] + w[k])).sum::<Scalar>() / 2.0
 }
 
 /// `A[k][l]`: how much a unit impulse at contact l speeds up the parting at contact k.
@@ -167,10 +172,11 @@ fn complementary(a: &[Vec<Scalar>], w0: &[Scalar]) -> Option<Vec<Scalar>> {
         for (&k, &pk) in on.iter().zip(&pushed) {
             p[k] = pk;
         }
-        let parting = |k: usize| w0[k] + (0..n).map(|l| a[k][l] * p[l]).sum::<Scalar>();
-        let fits =
-            pushed.iter().all(|&pk| pk >= 0.0) && (0..n).filter(|k| !on.contains(k)).all(|k| parting(k) >= -slack);
-        fits.then_some(p)
+        let parts = || {
+            let w = parting(a, w0, &p);
+            (0..n).filter(|k| !on.contains(k)).all(|k| w[k] >= -slack)
+        };
+        (pushed.iter().all(|&pk| pk >= 0.0) && parts()).then_some(p)
     })
 }
 
@@ -224,11 +230,10 @@ mod tests {
         assert_eq!(p, vec![1.0, 0.0]);
     }
 
-    /// The parting speeds after impulses `p` and the energy they gave, P·(w0 + w)/2.
+    /// The parting speeds after impulses `p` and the energy they gave.
     fn after(a: &[Vec<Scalar>], w0: &[Scalar], p: &[Scalar]) -> (Vec<Scalar>, Scalar) {
-        let w: Vec<Scalar> =
-            (0..w0.len()).map(|k| w0[k] + (0..p.len()).map(|l| a[k][l] * p[l]).sum::<Scalar>()).collect();
-        let gain = (0..w0.len()).map(|k| p[k] * (w0[k] + w[k])).sum::<Scalar>() / 2.0;
+        let w = parting(a, w0, p);
+        let gain = energy_given(p, w0, &w);
         (w, gain)
     }
 
