@@ -121,7 +121,9 @@ fn bad_meshes_name_the_actor_and_the_obj_file() {
     obj("flat.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
     obj("empty.obj", "# nothing\n");
     obj("concave.obj", concave_obj());
-    let scene = |file: &str| format!("Scene(actors: [Actor(name: \"rock\", shape: Obj(path: \"{file}\"))])");
+    let scene = |file: &str| format!("Scene(actors: [\n  Actor(name: \"rock\", shape: Obj(path: \"{file}\"))])");
+    // The error points at the path as written: line 2, column 40.
+    let place = |file: &str| format!("{file}.ron:2:40: ");
     for (file, needle) in [
         ("open.obj", "not closed"),
         ("flat.obj", "degenerate"),
@@ -129,7 +131,21 @@ fn bad_meshes_name_the_actor_and_the_obj_file() {
         ("concave.obj", "not convex"),
         ("missing.obj", "cannot open"),
     ] {
-        rejects(&dir, &format!("{file}.ron"), scene(file).as_bytes(), &["actor 'rock'", file, needle]);
+        rejects(&dir, &format!("{file}.ron"), scene(file).as_bytes(), &[&place(file), "actor 'rock'", file, needle]);
+    }
+}
+
+#[test]
+fn masses_whose_inverse_overflows_are_refused_where_they_are_written() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    // Given as a mass, RON places it; from a density, the error points at the actor's name.
+    let cases = [
+        ("tiny-mass.ron", "mass: 1e-320", "tiny-mass.ron:2:58: actor 'rock': mass: 1e-320 kg is too small"),
+        ("tiny-density.ron", "density: 1e-310", "tiny-density.ron:2:15: actor 'rock': mass: comes out as 1e-310 kg"),
+    ];
+    for (name, field, needle) in cases {
+        let text = format!("Scene(actors: [\n  Actor(name: \"rock\", shape: Box(size: (1.0, 1.0, 1.0)), {field})])");
+        rejects(&dir, name, text.as_bytes(), &[needle]);
     }
 }
 

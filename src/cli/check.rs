@@ -1,11 +1,11 @@
 //! `rigid check`: loads and builds a scene without running it, and prints what it holds.
 
-use super::{AppError, load_scene, outln, print_warnings};
+use super::{AppError, load_scene_text, outln, print_warnings, significant};
 use std::path::Path;
 
 pub(super) fn check(path: &Path) -> Result<(), AppError> {
-    let (def, path) = load_scene(Some(path))?;
-    let mut sim = crate::scene::build(&def, &path)?;
+    let (def, path, text) = load_scene_text(Some(path))?;
+    let mut sim = crate::scene::build_from_text(&def, &path, &text)?;
     print_warnings(&mut sim, &path);
     outln!("{}: ok", path.display());
     outln!("dt {} s, {} steps, gravity {:?}", def.dt, def.steps, def.gravity);
@@ -13,7 +13,9 @@ pub(super) fn check(path: &Path) -> Result<(), AppError> {
     outln!("{} actors, {} distinct meshes", sim.len(), sim.ctx.meshes.len());
     for a in sim.actors().iter().take(20) {
         let fixed = if a.mass.is_fixed() { " (fixed)" } else { "" };
-        outln!("  {}: mass {} kg at {}{fixed}", a.name, a.mass.mass, a.pose.position);
+        let p = a.pose.position;
+        let at = [p.x, p.y, p.z].map(significant).join(", ");
+        outln!("  {}: mass {} kg at [{at}]{fixed}", a.name, significant(a.mass.mass));
     }
     if sim.len() > 20 {
         outln!("  ... and {} more", sim.len() - 20);

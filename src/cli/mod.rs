@@ -213,12 +213,12 @@ pub(crate) fn check_writable(path: &Path, flag: &str) -> Result<(), AppError> {
 
 /// Loads and builds the scene of `render`/`export`; returns it with the number of steps.
 pub(crate) fn scene_sim(args: &SceneArgs) -> Result<(SceneDef, Sim, u64), AppError> {
-    let (mut def, path, _) = load_scene_set(args.scene.as_deref(), &args.set)?;
+    let (mut def, path, text) = load_scene_set(args.scene.as_deref(), &args.set)?;
     if let Some(dt) = args.dt {
         def.dt = dt;
     }
     let steps = args.steps.unwrap_or(def.steps);
-    let sim = crate::scene::build(&def, &path)?;
+    let sim = crate::scene::build_from_text(&def, &path, &text)?;
     Ok((def, sim, steps))
 }
 
@@ -237,4 +237,14 @@ pub(crate) fn sample(
         }
     }
     Ok(())
+}
+
+/// Six significant digits, in scientific notation outside 1e-3..1e6 (and plain 0).
+pub(crate) fn significant(x: f64) -> String {
+    if x == 0.0 || ((1e-3..1e6).contains(&x.abs())) {
+        let s = format!("{x:.6}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{x:.5e}")
+    }
 }

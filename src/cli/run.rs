@@ -1,7 +1,9 @@
 //! `rigid run`: steps a scene (or resumes a snapshot), streams the trajectory, writes the
 //! final state and snapshot, and prints a summary; Ctrl-C stops at a step boundary.
 
-use super::{AppError, check_writable, load_scene_set, outln, print_warnings, progress_bar, write_error, write_out};
+use super::{
+    AppError, check_writable, load_scene_set, outln, print_warnings, progress_bar, significant, write_error, write_out,
+};
 use crate::cli::args::RunArgs;
 use crate::error::SnapshotError;
 use crate::io::output::{TRAJECTORY_HEADER, state_json, trajectory_rows};
@@ -42,7 +44,7 @@ fn prepare(args: &RunArgs) -> Result<(Sim, PathBuf, String, u64), AppError> {
         def.schedule = Some(names.clone());
     }
     let steps = args.steps.unwrap_or(def.steps);
-    Ok((crate::scene::build(&def, &path)?, path, text, steps))
+    Ok((crate::scene::build_from_text(&def, &path, &text)?, path, text, steps))
 }
 
 fn read_snapshot(file: &Path) -> Result<Snapshot, SnapshotError> {
@@ -175,14 +177,4 @@ fn print_summary(sim: &Sim, before: &crate::sim::Totals, wall: std::time::Durati
         outln!("momentum drift |Δp| = {} kg·m/s (kept: no gravity, nothing fixed)", significant(drift));
     }
     Ok(())
-}
-
-/// Six significant digits, in scientific notation outside 1e-3..1e6 (and plain 0).
-fn significant(x: f64) -> String {
-    if x == 0.0 || ((1e-3..1e6).contains(&x.abs())) {
-        let s = format!("{x:.6}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        format!("{x:.5e}")
-    }
 }

@@ -55,6 +55,36 @@ pub fn build(scene: &SceneDef, path: &Path) -> Result<Sim, SceneError> {
     Ok(sim)
 }
 
+/// As `build`, with an actor's error (its mesh, or a mass from its density) placed at
+/// `line:column` in the scene's `text`: at the OBJ path as written, or else at the actor's
+/// name. These are found after parsing, so the parser cannot place them.
+pub fn build_from_text(scene: &SceneDef, path: &Path, text: &str) -> Result<Sim, SceneError> {
+    let quoted = |s: &str| text.find(&format!("\"{s}\"")).map(|at| (at, s.len() + 2));
+    build(scene, path).map_err(|e| match e {
+        SceneError::Mesh { path, actor, mesh, source } => {
+            let obj =
+                instances(scene, &path).ok().and_then(|all| match all.into_iter().find(|i| i.name == actor)?.shape {
+                    ShapeDef::Obj { path: obj, .. } => quoted(&obj),
+                    _ => None,
+                });
+            match obj.or_else(|| quoted(&actor)) {
+                Some(at) => crate::scene::error_at(
+                    &path,
+                    text,
+                    at,
+                    format!("actor '{actor}': shape: {}: {source}", mesh.display()),
+                ),
+                None => SceneError::Mesh { path, actor, mesh, source },
+            }
+        }
+        SceneError::Invalid { path, actor, field, reason } => match quoted(&actor).filter(|_| actor != "scene") {
+            Some(at) => crate::scene::error_at(&path, text, at, format!("actor '{actor}': {field}: {reason}")),
+            None => SceneError::Invalid { path, actor, field, reason },
+        },
+        other => other,
+    })
+}
+
 /// The pipeline settings a scene gives: its gravity and solver settings, substeps by
 /// `Params::substeps_for` unless it sets them.
 #[must_use]
@@ -97,12 +127,16 @@ pub fn spawn_all(sim: &mut Sim, instances: &[Instance], path: &Path) -> Result<(
             MassSpec::Mass(m) => m,
             MassSpec::Density(rho) => rho * volume,
         };
-        if !(mass.is_finite() && mass > 0.0) {
+        // A subnormal mass is refused too: its inverse overflows (see `schema::invertible`).
+        if !(mass.is_normal() && mass > 0.0) {
             return Err(invalid(
                 path,
                 &inst.name,
                 "mass",
-                format!("comes out as {mass} kg; give a positive mass or density"),
+                format!(
+                    "comes out as {mass:e} kg; give a mass or density that makes it at least {:e} kg",
+                    f64::MIN_POSITIVE
+                ),
             ));
         }
         sim.spawn(&BodyDef {

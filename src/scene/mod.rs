@@ -11,5 +11,5 @@ mod schema;
 pub mod spawners;
 pub mod warnings;
 
-pub use instantiate::build;
+pub use instantiate::{build, build_from_text};
 pub use schema::*;

@@ -300,7 +300,7 @@ impl TryFrom<RawActor> for ActorDef {
         raw.shape.check().map_err(fail)?;
         let mass = match (raw.mass, raw.density) {
             (Some(_), Some(_)) => return Err(fail(("mass".into(), "give `mass` or `density`, not both".into()))),
-            (Some(m), None) => MassSpec::Mass(positive("mass", m, "kg").map_err(fail)?),
+            (Some(m), None) => MassSpec::Mass(invertible(positive("mass", m, "kg").map_err(fail)?).map_err(fail)?),
             (None, Some(d)) => MassSpec::Density(positive("density", d, "kg/m^3").map_err(fail)?),
             (None, None) => MassSpec::Density(1.0),
         };
@@ -343,6 +343,18 @@ fn positive(field: &str, v: Scalar, unit: &str) -> Result<Scalar, (String, Strin
         Ok(v)
     } else {
         Err((field.into(), format!("must be a finite number > 0 {unit}, got {v}")))
+    }
+}
+
+/// A mass whose inverse is finite: the solver works with 1/m, which a subnormal mass overflows.
+fn invertible(m: Scalar) -> Result<Scalar, (String, String)> {
+    if m.is_normal() {
+        Ok(m)
+    } else {
+        Err((
+            "mass".into(),
+            format!("{m:e} kg is too small: its inverse overflows (the least is {:e})", Scalar::MIN_POSITIVE),
+        ))
     }
 }
 
@@ -396,6 +408,13 @@ fn parse_error(e: ron::error::SpannedError, text: &str, path: &Path) -> SceneErr
         offset = start;
         (line, col) = line_col(text, offset);
     }
+    // RON reports an actor's checked field (`actor 'a': mass: ...`) at the actor's end.
+    if let ron::Error::Message(m) = &e.code
+        && let Some(at) = actor_field(text, offset, m)
+    {
+        offset = at;
+        (line, col) = line_col(text, offset);
+    }
     // An actor without a name is reported by its place in the list.
     if let Some(rest) = message.strip_prefix("actor: ") {
         message = format!("{}: {rest}", unnamed_actor(text, offset));
@@ -424,6 +443,27 @@ fn parse_error(e: ron::error::SpannedError, text: &str, path: &Path) -> SceneErr
         text: NamedSource::new(path.display().to_string(), text.to_string()),
         at: (offset, token_len(text, offset)).into(),
     }
+}
+
+/// Where the field an actor's check names (`actor 'a': shape.size.x: ...` names `shape`) is
+/// written in the actor whose text ends at `offset`.
+fn actor_field(text: &str, offset: usize, message: &str) -> Option<usize> {
+    let rest =
+        message.strip_prefix("actor: ").or_else(|| Some(message.strip_prefix("actor '")?.split_once("': ")?.1))?;
+    let field = rest.split([':', '.']).next()?;
+    let before = text.get(..offset)?;
+    let start = before.rfind("Actor(")?;
+    let mut from = offset;
+    while let Some(i) = before[start..from].rfind(field) {
+        let at = start + i;
+        let after = before[at + field.len()..].trim_start();
+        let boundary = !before[..at].ends_with(|c: char| c.is_alphanumeric() || c == '_');
+        if boundary && after.starts_with(':') {
+            return Some(at);
+        }
+        from = at;
+    }
+    None
 }
 
 /// The length of the word or number at `offset` (at least one character, unless at the end):

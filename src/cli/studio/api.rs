@@ -295,9 +295,9 @@ fn post_scene(shared: &Shared, body: &str) -> Reply {
         Err(e) => return Reply::error(400, clean_error(&e.to_string(), &mesh_dir)),
     };
     // Built outside the lock: a big scene does not stall the page meanwhile.
-    let sim = match build_sim(&def, &path, None, &mesh_dir) {
+    let sim = match crate::scene::build_from_text(&def, &path, body) {
         Ok(sim) => sim,
-        Err(e) => return Reply::error(400, e),
+        Err(e) => return Reply::error(400, clean_error(&e.to_string(), &mesh_dir)),
     };
     let mut s = lock(shared);
     s.def = def;

@@ -128,8 +128,8 @@ pub(crate) fn lock(shared: &Shared) -> MutexGuard<'_, Studio> {
 }
 
 pub(super) fn studio(args: &StudioArgs) -> Result<(), AppError> {
-    let (def, path, _) = super::load_scene_text(args.scene.as_deref())?;
-    let mut sim = crate::scene::build(&def, &path)?;
+    let (def, path, text) = super::load_scene_text(args.scene.as_deref())?;
+    let mut sim = crate::scene::build_from_text(&def, &path, &text)?;
     super::print_warnings(&mut sim, &path);
     // Created by the first upload: a studio that uploads nothing leaves nothing behind.
     let mesh_dir = std::env::temp_dir().join(format!("rigid-studio-{}", std::process::id()));
