@@ -26,7 +26,7 @@ use hecs::World;
 mod squeeze;
 
 /// A pair is swept when the two bodies travel more than this share of the thinner one's
-/// thickness in a step. Below half, the discrete tests find the near face and the right normal
+/// thickness in a step relative to each other. Below half, the discrete tests find the near face and the right normal
 /// (docs/physics.md §5); this leaves a margin, and keeps box-gas's fastest pairs (about 0.37)
 /// discrete, so slow pairs keep their results bit for bit.
 pub const FAST_FRACTION: Scalar = 0.4;
@@ -202,11 +202,10 @@ fn sphere_of(ctx: &StepContext, s: &CcdScratch, k: usize) -> Sphere {
     Sphere(0.5 * (from + to), b.radius[k] + 0.5 * (to - from).abs().element_sum())
 }
 
-/// How far body k's points may travel in the step [m], and its thickness [m].
+/// How far body k's points may travel in the step by its spin [m], and its thickness [m].
 fn travel_of(ctx: &StepContext, k: usize) -> (Scalar, Scalar) {
     let (b, dt) = (&ctx.bodies, ctx.dt);
-    let travel = (b.velocity[k].length() + b.angular_velocity[k].length() * b.radius[k]) * dt;
-    (travel, ctx.meshes.get(b.mesh[k]).thickness)
+    (b.angular_velocity[k].length() * b.radius[k] * dt, ctx.meshes.get(b.mesh[k]).thickness)
 }
 
 /// Adds pair (i, j) when the two may meet within the step (their swept spheres meet) and
@@ -229,8 +228,11 @@ fn consider(
         return;
     }
     let key = (i.min(j) as u32, i.max(j) as u32);
+    // Passing through is a matter of the pair's relative motion: two bodies falling side by
+    // side are each fast, but not to each other.
     let ((ti, hi), (tj, hj)) = (travel(i), travel(j));
-    if b.is_fixed(i) && b.is_fixed(j) || ti + tj <= FAST_FRACTION * hi.min(hj) {
+    let relative = (b.velocity[i] - b.velocity[j]).length() * ctx.dt + ti + tj;
+    if b.is_fixed(i) && b.is_fixed(j) || relative <= FAST_FRACTION * hi.min(hj) {
         return;
     }
     s.pairs.push(Swept { a: key.0, b: key.1, next: None });
