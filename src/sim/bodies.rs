@@ -121,10 +121,16 @@ impl Bodies {
         let vectors =
             [("velocity", &self.velocity), ("angular_velocity", &self.angular_velocity), ("position", &self.position)];
         // Cheap pass first: a sum is finite iff every term is (a NaN or ∞ survives addition
-        // unless ∞ − ∞, which is itself NaN); the search below runs only on failure.
-        let total: Scalar = vectors.iter().flat_map(|(_, v)| v.iter()).map(|v| v.x + v.y + v.z).sum::<Scalar>()
-            + self.orientation.iter().map(|q| q.x + q.y + q.z + q.w).sum::<Scalar>();
-        if total.is_finite() {
+        // unless ∞ − ∞, which is itself NaN, and an overflow only sends it to the search); the
+        // search below runs only on failure. Each row's terms go to four sums, not one chain
+        // of additions: the guard runs after every system.
+        let rows = self.velocity.iter().zip(&self.angular_velocity).zip(&self.position).zip(&self.orientation);
+        let (mut sum, mut last) = (Vector::ZERO, 0.0);
+        for (((v, w), x), q) in rows {
+            sum += *v + *w;
+            last += x.element_sum() + (q.x + q.y) + (q.z + q.w);
+        }
+        if (sum.element_sum() + last).is_finite() {
             return None;
         }
         (0..self.len()).find_map(|i| {
@@ -165,4 +171,33 @@ pub fn rotate_tensor(orientation: Quat, m: Mat3) -> Mat3 {
         && m.y_axis.y == m.z_axis.z
         && [m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.z, m.z_axis.x, m.z_axis.y].iter().all(|&x| x == 0.0);
     if isotropic { m } else { world_inverse_inertia(orientation, m) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_nan_guard_names_the_first_bad_row_and_field_and_passes_huge_finite_values() {
+        let mut b = Bodies::default();
+        b.resize(5);
+        // Sums of these overflow to infinity, yet every value is finite.
+        for i in 0..5 {
+            b.position[i] = Vector::splat(f64::MAX);
+            b.velocity[i] = Vector::splat(-f64::MAX);
+        }
+        assert_eq!(b.first_non_finite(), None);
+        for (field, bad) in [(0, f64::NAN), (1, f64::INFINITY), (2, f64::NEG_INFINITY), (3, f64::NAN)] {
+            let mut c = b.clone();
+            match field {
+                0 => c.velocity[3].y = bad,
+                1 => c.angular_velocity[3].z = bad,
+                2 => c.position[3].x = bad,
+                _ => c.orientation[3].w = bad,
+            }
+            c.position[4].x = f64::NAN; // a later row: the first is named
+            let name = ["velocity", "angular_velocity", "position", "orientation"][field];
+            assert_eq!(c.first_non_finite(), Some((3, name)));
+        }
+    }
 }
