@@ -60,11 +60,12 @@ pub struct CcdScratch {
     flown: Vec<bool>,
     /// Impacts of each body this step.
     impacts: Vec<u32>,
-    /// Bodies faster than the cheap bound, and those whose reach has been searched.
+    /// Bodies faster than the cheap bound.
     mover: Vec<bool>,
     /// Bodies a joint holds: `solve` answers their contacts with their joints.
     jointed: Vec<bool>,
-    searched: Vec<bool>,
+    /// The swept sphere each body's partners were searched within, if they were (`search`).
+    searched: Vec<Option<Sphere>>,
     pairs: Vec<Swept>,
     clip: ClipScratch,
 }
@@ -131,10 +132,12 @@ fn prepare(world: &World, ctx: &StepContext, s: &mut CcdScratch, speed: Scalar) 
     let (b, n) = (&ctx.bodies, ctx.bodies.len());
     s.mover.clear();
     s.mover.extend((0..n).map(|i| faster(b, i, speed)));
-    for v in [&mut s.searched, &mut s.flown, &mut s.jointed] {
+    for v in [&mut s.flown, &mut s.jointed] {
         v.clear();
         v.resize(n, false);
     }
+    s.searched.clear();
+    s.searched.resize(n, None);
     s.taken.clear();
     s.taken.resize(n, 0.0);
     s.impacts.clear();
@@ -163,7 +166,7 @@ fn candidates(ctx: &StepContext, s: &mut CcdScratch) {
     let widened: Vec<bool> = (0..b.len()).map(|i| s.mover[i] && params.speculative_distance(dt, b, i) > 0.0).collect();
     for i in 0..b.len() {
         if s.mover[i] && !widened[i] {
-            s.searched[i] = true;
+            s.searched[i] = Some(spheres[i]);
             for j in (0..b.len()).filter(|&j| j != i) {
                 consider(ctx, s, (i, j), (&spheres[i], &spheres[j]), |k| travels[k]);
             }
@@ -182,8 +185,8 @@ fn candidates(ctx: &StepContext, s: &mut CcdScratch) {
 
 /// Adds the pairs of body `i` with every body whose swept sphere meets its own.
 fn search(ctx: &StepContext, s: &mut CcdScratch, i: usize) {
-    s.searched[i] = true;
     let si = sphere_of(ctx, s, i);
+    s.searched[i] = Some(si);
     for j in (0..ctx.bodies.len()).filter(|&j| j != i) {
         let sj = sphere_of(ctx, s, j);
         consider(ctx, s, (i, j), (&si, &sj), |k| travel_of(ctx, k));
@@ -192,7 +195,14 @@ fn search(ctx: &StepContext, s: &mut CcdScratch, i: usize) {
 
 /// The sphere a body sweeps over the rest of the step along its centre's path: centre and
 /// radius [m].
+#[derive(Clone, Copy, Debug)]
 struct Sphere(Vector, Scalar);
+
+impl Sphere {
+    fn within(&self, outer: &Sphere) -> bool {
+        (self.0 - outer.0).length() + self.1 <= outer.1
+    }
+}
 
 /// Body k's `Sphere` as it stands.
 fn sphere_of(ctx: &StepContext, s: &CcdScratch, k: usize) -> Sphere {
@@ -258,7 +268,13 @@ fn impacts(ctx: &mut StepContext, s: &mut CcdScratch, speed: Scalar) {
             }
         }
         for i in [a as usize, b as usize].into_iter().chain(partners.iter().copied()) {
-            if !s.searched[i] && faster(&ctx.bodies, i, speed) {
+            // A body searched before may be turned out of that search's sphere (a bounce off
+            // a wall early in the step): searched again from where it flies now.
+            let unsearched = match &s.searched[i] {
+                Some(sphere) => !ctx.bodies.is_fixed(i) && !sphere_of(ctx, s, i).within(sphere),
+                None => faster(&ctx.bodies, i, speed),
+            };
+            if unsearched {
                 let known = s.pairs.len();
                 search(ctx, s, i);
                 let added: Vec<Swept> = s.pairs.drain(known..).collect();

@@ -365,3 +365,22 @@ fn a_slow_pair_carried_at_speed_meets_as_it_does_at_rest() {
     }
     assert!(closing(&still) < 0.0, "they met and parted");
 }
+
+/// A cube at 100 m/s bounces off a wall early in a step and flies back for the rest of it,
+/// towards a plate behind where it started: outside the reach swept before the bounce, so
+/// the plate is searched again after it, and stops the cube.
+#[test]
+fn a_cube_bouncing_back_within_a_step_meets_the_plate_behind_it() {
+    let mut sim = sim_from_text(&format!(
+        "Scene(dt: {DT}, gravity: (0.0, 0.0, 0.0), actors: [
+            Actor(name: \"wall\", shape: Box(size: (0.1, 4.0, 4.0)), position: (0.5, 0.0, 0.0), fixed: true,
+                  restitution: 1.0),
+            Actor(name: \"cube\", shape: Box(size: (0.2, 0.2, 0.2)), velocity: (100.0, 0.0, 0.0), restitution: 1.0),
+            Actor(name: \"plate\", shape: Box(size: (0.05, 0.3, 0.3)), position: (-0.8, 0.0, 0.0), restitution: 1.0),
+        ])"
+    ));
+    run_apart(&mut sim, 1, ("cube", "plate"), 1e-9);
+    let (cube, plate) = (actor(&sim, "cube"), actor(&sim, "plate"));
+    assert!(cube.pose.position.x > plate.pose.position.x, "the cube is on its side: {}", cube.pose.position);
+    assert!(plate.velocity.linear.x < -1.0, "the plate was struck: {}", plate.velocity.linear);
+}
