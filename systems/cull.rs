@@ -53,8 +53,8 @@ fn drop_jointed(ctx: &mut StepContext) {
 fn reach(ctx: &mut StepContext) {
     let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
     let reach = &mut ctx.scratch.get_mut::<CullScratch>().reach;
-    reach.clear();
-    reach.extend((0..b.len()).map(|i| b.radius[i] + params.speculative_distance(dt, b, i)));
+    params.speculative_distances(dt, b, reach);
+    reach.iter_mut().zip(&b.radius).for_each(|(r, radius)| *r += radius);
 }
 
 /// Radii more than this many times the median go on the short "large" list tested against

@@ -149,17 +149,18 @@ pub fn boxes_separated_by(a: &BoxPose, b: &BoxPose, [wide, proof]: [Scalar; 2]) 
 /// the proof margin widened to the contact margin for pairs that may rest on each other, so
 /// `solve` still sees them while apart by less (a micro-bounce must not lose a stack's
 /// contact); apart by more than the second, no detection test can fire (`separated`).
-/// `speculative` holds each body's speculative distance.
+/// `speculative` holds each body's speculative distance; `resting` says whether every pair
+/// may rest (`Params::resting_contacts` with no friction), worked out once, not per pair.
 fn pair_margin(
     p: &Pair,
     b: &Bodies,
     meshes: &MeshTable,
     params: &Params,
-    (dt, speculative): (Scalar, &[Scalar]),
+    (resting, speculative): (bool, &[Scalar]),
 ) -> (Scalar, Scalar) {
     let (ia, ib) = (p.a as usize, p.b as usize);
     let proof = PRUNE_MARGIN * (b.radius[ia] + b.radius[ib]);
-    if params.resting_contacts(dt, b.pair_friction(ia, ib)) {
+    if resting || b.pair_friction(ia, ib) > 0.0 {
         let speculative = speculative[ia] + speculative[ib];
         (proof.max(params.contact_margin * b.thinner(meshes, ia, ib) + speculative), proof)
     } else {
@@ -216,8 +217,9 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     if judged {
         take_recycled(ctx, true);
     }
-    let (b, meshes, params, dt) = (&ctx.bodies, &ctx.meshes, &ctx.params, ctx.dt);
-    let margin = |p: &Pair| pair_margin(p, b, meshes, params, (dt, &speculative));
+    let (b, meshes, params) = (&ctx.bodies, &ctx.meshes, &ctx.params);
+    let all_rest = params.resting_contacts(ctx.dt, 0.0);
+    let margin = |p: &Pair| pair_margin(p, b, meshes, params, (all_rest, &speculative));
     let as_box = |i: u32| {
         let i = i as usize;
         meshes.get(b.mesh[i]).box_half_extents.map(|half| BoxPose {
@@ -260,8 +262,8 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         *bounds = p.bounds(hints);
     });
     let bounds = &*bounds;
-    let (posed, params, dt) = (&ctx.posed, &ctx.params, ctx.dt);
-    let margin = |p: &Pair| pair_margin(p, b, meshes, params, (dt, &speculative));
+    let (posed, params) = (&ctx.posed, &ctx.params);
+    let margin = |p: &Pair| pair_margin(p, b, meshes, params, (all_rest, &speculative));
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     let shape = |i: u32| if many(i) { Shape::Placed(placed(i as usize)) } else { Shape::Posed(posed.get(i)) };
     let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };

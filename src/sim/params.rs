@@ -75,18 +75,29 @@ impl Params {
     /// speculatively the step *before* the bodies meet and a fast body lands on another, not in it.
     #[must_use]
     pub fn speculative_distance(&self, dt: Scalar, b: &Bodies, i: usize) -> Scalar {
-        if !self.resting_contacts(dt, b.friction[i]) || b.inv_mass[i] == 0.0 {
-            return 0.0;
-        }
-        let speed = b.velocity[i].length() + self.gravity.length() * dt + b.angular_velocity[i].length() * b.radius[i];
-        speed * dt
+        self.speculative_with(self.step_terms(dt), dt, b, i)
     }
 
     /// `speculative_distance` of every body, into `out` (by actor index): the systems that
     /// need it for every pair compute it once per body, not twice per pair.
     pub fn speculative_distances(&self, dt: Scalar, b: &Bodies, out: &mut Vec<Scalar>) {
+        let terms = self.step_terms(dt);
         out.clear();
-        out.extend((0..b.len()).map(|i| self.speculative_distance(dt, b, i)));
+        out.extend((0..b.len()).map(|i| self.speculative_with(terms, dt, b, i)));
+    }
+
+    /// What `speculative_distance` takes from the step alone: whether every pair may rest
+    /// (`resting_contacts` without friction) and gravity's gain of speed over the step.
+    fn step_terms(&self, dt: Scalar) -> (bool, Scalar) {
+        (self.resting_contacts(dt, 0.0), self.gravity.length() * dt)
+    }
+
+    fn speculative_with(&self, (all_rest, fall): (bool, Scalar), dt: Scalar, b: &Bodies, i: usize) -> Scalar {
+        if !(all_rest || b.friction[i] > 0.0) || b.inv_mass[i] == 0.0 {
+            return 0.0;
+        }
+        let speed = b.velocity[i].length() + fall + b.angular_velocity[i].length() * b.radius[i];
+        speed * dt
     }
 
     /// The length of a substep of `solve` [s] for a step of `dt`.
