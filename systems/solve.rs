@@ -34,10 +34,11 @@ use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prep
 use hecs::World;
 use rayon::prelude::*;
 
-/// Relative motion [fraction of the thinner body] below which a pair keeps last step's contact
-/// points: rapier recycles below 5 cm; a tenth of that keeps a sliding or tipping body's
-/// points fresh.
-const RECYCLE_DISTANCE: Scalar = 0.005;
+/// Relative motion [fraction of the thinner body] since a pair's contact points were found
+/// below which it keeps them: rapier recycles below 5 cm; a fifth of that (1 cm for a 1 m cube)
+/// still keeps a sliding or tipping body's points fresh, and at half of it a settling pile
+/// found more points afresh and settled no better.
+const RECYCLE_DISTANCE: Scalar = 0.01;
 
 /// Holds resting contacts, applies friction and bounces impacts (see the module docs).
 ///
