@@ -26,9 +26,9 @@ use hecs::World;
 mod squeeze;
 
 /// A pair is swept when the two bodies travel more than this share of the thinner one's
-/// thickness in a step relative to each other. Below half, the discrete tests find the near face and the right normal
-/// (docs/physics.md §5); this leaves a margin, and keeps box-gas's fastest pairs (about 0.37)
-/// discrete, so slow pairs keep their results bit for bit.
+/// thickness in a step relative to each other. Below half, the discrete tests find the near
+/// face and the right normal (docs/physics.md §5); this leaves a margin, and keeps box-gas's
+/// fastest pairs (about 0.37) discrete, so slow pairs keep their results bit for bit.
 pub const FAST_FRACTION: Scalar = 0.4;
 
 /// Gap [share of the thinner thickness] at which a swept pair is stopped and takes its impulse:

@@ -138,9 +138,9 @@ fn grid_pairs(b: &Bodies, reach: &[Scalar], s: &mut CullScratch) -> usize {
 }
 
 /// A kept list's reaches are today's widened by this fraction: room for each body to move
-/// before the list must be built again. At 0.1 box-gas's cubes left it within a few steps
-/// and the grid was built again nearly every step; 0.3 keeps it several times longer for a
-/// list about twice as long to filter (0.5 and 1 filtered more than they saved).
+/// before the list must be built again. A third of the reach keeps box-gas's fastest cubes
+/// (0.18 m a step) in a list for several steps; a wider list costs more to filter each step
+/// than its rarer rebuilds save (BENCH.md).
 const MARGIN: Scalar = 0.3;
 /// Relative room left for rounding in the two sphere tests and the distance moved (each a
 /// few ulps, about 1e-15): see `PairCache`.

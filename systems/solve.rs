@@ -36,8 +36,8 @@ use rayon::prelude::*;
 
 /// Relative motion [fraction of the thinner body] since a pair's contact points were found
 /// below which it keeps them: rapier recycles below 5 cm; a fifth of that (1 cm for a 1 m cube)
-/// still keeps a sliding or tipping body's points fresh, and at half of it a settling pile
-/// found more points afresh and settled no better.
+/// still keeps a sliding or tipping body's points fresh, while a pile creeping by millimetres
+/// keeps its points (BENCH.md).
 const RECYCLE_DISTANCE: Scalar = 0.01;
 
 /// Holds resting contacts, applies friction and bounces impacts (see the module docs).
