@@ -149,18 +149,18 @@ pub fn boxes_separated_by(a: &BoxPose, b: &BoxPose, [wide, proof]: [Scalar; 2]) 
 /// the proof margin widened to the contact margin for pairs that may rest on each other, so
 /// `solve` still sees them while apart by less (a micro-bounce must not lose a stack's
 /// contact); apart by more than the second, no detection test can fire (`separated`).
-/// `speculative` holds each body's speculative distance; `resting` says whether every pair
+/// `speculative` holds each body's speculative distance; `all_rest` says whether every pair
 /// may rest (`Params::resting_contacts` with no friction), worked out once, not per pair.
 fn pair_margin(
     p: &Pair,
     b: &Bodies,
     meshes: &MeshTable,
     params: &Params,
-    (resting, speculative): (bool, &[Scalar]),
+    (all_rest, speculative): (bool, &[Scalar]),
 ) -> (Scalar, Scalar) {
     let (ia, ib) = (p.a as usize, p.b as usize);
     let proof = PRUNE_MARGIN * (b.radius[ia] + b.radius[ib]);
-    if resting || b.pair_friction(ia, ib) > 0.0 {
+    if all_rest || b.pair_friction(ia, ib) > 0.0 {
         let speculative = speculative[ia] + speculative[ib];
         (proof.max(params.contact_margin * b.thinner(meshes, ia, ib) + speculative), proof)
     } else {

@@ -60,28 +60,25 @@ pub fn build(scene: &SceneDef, path: &Path) -> Result<Sim, SceneError> {
 /// name. These are found after parsing, so the parser cannot place them.
 pub fn build_from_text(scene: &SceneDef, path: &Path, text: &str) -> Result<Sim, SceneError> {
     let quoted = |s: &str| text.find(&format!("\"{s}\"")).map(|at| (at, s.len() + 2));
-    build(scene, path).map_err(|e| match e {
-        SceneError::Mesh { path, actor, mesh, source } => {
-            let obj =
-                instances(scene, &path).ok().and_then(|all| match all.into_iter().find(|i| i.name == actor)?.shape {
-                    ShapeDef::Obj { path: obj, .. } => quoted(&obj),
+    build(scene, path).map_err(|e| {
+        let at = match &e {
+            SceneError::Mesh { actor, .. } => instances(scene, path)
+                .ok()
+                .and_then(|all| match &all.iter().find(|i| &i.name == actor)?.shape {
+                    ShapeDef::Obj { path: obj, .. } => quoted(obj),
                     _ => None,
-                });
-            match obj.or_else(|| quoted(&actor)) {
-                Some(at) => crate::scene::error_at(
-                    &path,
-                    text,
-                    at,
-                    format!("actor '{actor}': shape: {}: {source}", mesh.display()),
-                ),
-                None => SceneError::Mesh { path, actor, mesh, source },
-            }
-        }
-        SceneError::Invalid { path, actor, field, reason } => match quoted(&actor).filter(|_| actor != "scene") {
-            Some(at) => crate::scene::error_at(&path, text, at, format!("actor '{actor}': {field}: {reason}")),
-            None => SceneError::Invalid { path, actor, field, reason },
-        },
-        other => other,
+                })
+                .or_else(|| quoted(actor)),
+            SceneError::Invalid { actor, .. } if actor != "scene" => quoted(actor),
+            _ => None,
+        };
+        // The message is the error's own, less the file it starts with.
+        let placed = at.map(|at| {
+            let message = e.to_string();
+            let message = message.strip_prefix(&format!("{}: ", path.display())).unwrap_or(&message);
+            crate::scene::error_at(path, text, at, message.to_string())
+        });
+        placed.unwrap_or(e)
     })
 }
 
