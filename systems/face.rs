@@ -29,6 +29,17 @@ pub fn face(_world: &mut World, ctx: &mut StepContext) {
 /// §1.6): the (B, A) result has its normal flipped so it still points from B to A.
 /// Both ways share the walks along the line of centres (`centre_walks`).
 pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
+    let count_hits = |ctx: &mut StepContext| {
+        // Only this test reports `feature`, so this counts its hits once even when a schedule
+        // runs it twice; hits of earlier tests keep their own feature.
+        let found =
+            |p: &&crate::collision::contact::Pair| matches!(p.state, PairState::Found(c) if c.feature == feature);
+        ctx.stats.found[feature as usize] = ctx.pairs.iter().filter(found).count() as u64;
+    };
+    // A resting scene's pairs all keep their points (`prune`): nothing to pose, walk or test.
+    if !ctx.pairs.iter().any(|p| p.is_candidate()) {
+        return count_hits(ctx);
+    }
     ctx.pose_candidates();
     let mut walks = std::mem::take(ctx.scratch.get_mut::<CentreWalks>());
     walks.update(ctx);
@@ -56,10 +67,7 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
         }
     });
     *ctx.scratch.get_mut::<CentreWalks>() = walks;
-    // Only this test reports `feature`, so this counts its hits once even when a schedule runs
-    // it twice; hits of earlier tests keep their own feature.
-    let hits = ctx.pairs.iter().filter(|p| matches!(p.state, PairState::Found(c) if c.feature == feature)).count();
-    ctx.stats.found[feature as usize] = hits as u64;
+    count_hits(ctx);
 }
 
 /// Each candidate pair's `centre_walks`, found by the first detection test of a step and
