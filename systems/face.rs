@@ -44,19 +44,27 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
     let mut walks = std::mem::take(ctx.scratch.get_mut::<CentreWalks>());
     walks.update(ctx);
     let posed = &ctx.posed;
-    let rows = ctx.pairs.par_iter_mut().zip(walks.hints.par_iter().zip(walks.floods.par_iter_mut()));
-    rows.filter(|(p, _)| p.is_candidate()).for_each_init(Flood::default, |flood, (pair, (w, floods))| {
+    // Each candidate with its entry in `walks`, if that is still its own (a custom system may
+    // change the pairs between the tests): a serial pass, then the tests in parallel.
+    let mut entries = walks.list.iter().zip(walks.floods.iter_mut()).peekable();
+    let mut rows = Vec::new();
+    for (i, pair) in ctx.pairs.iter_mut().enumerate().filter(|(_, p)| p.is_candidate()) {
+        while entries.next_if(|(e, _)| (e.0 as usize) < i).is_some() {}
+        let key = (pair.a, pair.b);
+        let own = |(e, _): &(&(u32, (u32, u32), Hints), &mut [Below; 2])| e.0 as usize == i && e.1 == key;
+        rows.push((pair, entries.next_if(own)));
+    }
+    rows.par_iter_mut().for_each_init(Flood::default, |flood, (pair, entry)| {
         let (a, b) = (posed.get(pair.a), posed.get(pair.b));
-        let shared = w.0 == (pair.a, pair.b);
-        let [ha, hb] = if shared { w.1 } else { centre_walks(a, b) };
+        let [ha, hb] = entry.as_ref().map_or_else(|| centre_walks(a, b), |(e, _)| e.2);
         // Each way's flood is kept for the pair's next test (`Below`), or forgotten.
         let mut test = |(x, y): (&Posed, &Posed), hints: Hints, way: usize| {
-            match shared {
-                true => std::mem::swap(&mut flood.below, &mut floods[way]),
-                false => flood.below.clear(),
+            match entry {
+                Some((_, floods)) => std::mem::swap(&mut flood.below, &mut floods[way]),
+                None => flood.below.clear(),
             }
             let contact = kernel(x, y, hints, flood);
-            if shared {
+            if let Some((_, floods)) = entry {
                 std::mem::swap(&mut flood.below, &mut floods[way]);
             }
             contact
@@ -66,37 +74,43 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
             pair.state = PairState::Found(contact);
         }
     });
+    drop(rows);
     *ctx.scratch.get_mut::<CentreWalks>() = walks;
     count_hits(ctx);
 }
 
-/// Each candidate pair's `centre_walks`, found by the first detection test of a step and
-/// shared by the others (the bodies do not move between them), and each pair's floods both
-/// ways (`Below`), kept by the first test that floods and reused for the same poses. Each
-/// entry names its pair; one that does not match is found afresh, so a schedule that changes
+/// The step's candidate pairs as the first detection test found them, each with its
+/// `centre_walks`, shared by the other tests (the bodies do not move between them), and its
+/// floods both ways (`Below`), kept by the first test that floods and reused for the same
+/// poses. Only the candidates: a resting pile's pairs mostly keep their points and skip the
+/// tests, and walking or clearing all of them cost more than the tests. Each entry names its
+/// pair (index and bodies); one that does not match is found afresh, so a schedule that changes
 /// the pairs between the tests only loses the sharing.
 #[derive(Default)]
 struct CentreWalks {
     step: u64,
-    hints: Vec<((u32, u32), Hints)>,
+    /// The number of pairs when `list` was made.
+    pairs: usize,
+    /// Each candidate's index among the pairs, its bodies and its walks, in pair order.
+    list: Vec<(u32, (u32, u32), Hints)>,
+    /// Each entry's floods, both ways.
     floods: Vec<[Below; 2]>,
 }
 
 impl CentreWalks {
     fn update(&mut self, ctx: &StepContext) {
-        if self.step == ctx.step && self.hints.len() == ctx.pairs.len() {
+        if self.step == ctx.step && self.pairs == ctx.pairs.len() {
             return;
         }
         let posed = &ctx.posed;
-        self.step = ctx.step;
-        self.hints.clear();
-        let walk = |p: &crate::collision::contact::Pair| match p.is_candidate() {
-            true => ((p.a, p.b), centre_walks(posed.get(p.a), posed.get(p.b))),
-            false => ((u32::MAX, u32::MAX), [None; 2]),
-        };
-        ctx.pairs.par_iter().map(walk).collect_into_vec(&mut self.hints);
+        (self.step, self.pairs) = (ctx.step, ctx.pairs.len());
+        self.list.clear();
+        let candidates = ctx.pairs.iter().enumerate().filter(|(_, p)| p.is_candidate());
+        self.list.extend(candidates.map(|(i, p)| (i as u32, (p.a, p.b), [None; 2])));
+        let walk = |e: &mut (u32, (u32, u32), Hints)| e.2 = centre_walks(posed.get(e.1.0), posed.get(e.1.1));
+        self.list.par_iter_mut().for_each(walk);
         // The buffers stay, for the next step's floods.
-        self.floods.resize_with(ctx.pairs.len(), Default::default);
+        self.floods.resize_with(self.list.len(), Default::default);
         self.floods.iter_mut().flatten().for_each(Below::clear);
     }
 }

@@ -90,13 +90,15 @@ pub fn resolve(_world: &mut World, ctx: &mut StepContext) {
             pair.state = PairState::Resolved(contact);
             let (ia, ib) = (pair.a as usize, pair.b as usize);
             let b = &mut ctx.bodies;
-            let (mut sa, mut sb) = (state(b, ia), state(b, ib));
-            let e = 0.5 * (b.restitution[ia] + b.restitution[ib]);
             // Where `solve` runs it takes the impacts too: it stops the approach over the whole
             // manifold and bounces each point (`solver::restitution`), where one impulse at one
             // point would set the body turning.
-            let held = ctx.params.resting_contacts(ctx.dt, b.pair_friction(ia, ib));
-            if held || approach_speed(&sa, &sb, &contact) <= threshold {
+            if ctx.params.resting_contacts(ctx.dt, b.pair_friction(ia, ib)) {
+                continue;
+            }
+            let (mut sa, mut sb) = (state(b, ia), state(b, ib));
+            let e = 0.5 * (b.restitution[ia] + b.restitution[ib]);
+            if approach_speed(&sa, &sb, &contact) <= threshold {
                 continue;
             }
             let Some(j) = collision_impulse(&sa, &sb, &contact, e) else { continue };
