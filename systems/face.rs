@@ -51,7 +51,7 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
     for (i, pair) in ctx.pairs.iter_mut().enumerate().filter(|(_, p)| p.is_candidate()) {
         while entries.next_if(|(e, _)| (e.0 as usize) < i).is_some() {}
         let key = (pair.a, pair.b);
-        let own = |(e, _): &(&(u32, (u32, u32), Hints), &mut [Below; 2])| e.0 as usize == i && e.1 == key;
+        let own = |(e, _): &(&Entry, &mut [Below; 2])| e.0 as usize == i && e.1 == key;
         rows.push((pair, entries.next_if(own)));
     }
     rows.par_iter_mut().for_each_init(Flood::default, |flood, (pair, entry)| {
@@ -92,10 +92,13 @@ struct CentreWalks {
     /// The number of pairs when `list` was made.
     pairs: usize,
     /// Each candidate's index among the pairs, its bodies and its walks, in pair order.
-    list: Vec<(u32, (u32, u32), Hints)>,
+    list: Vec<Entry>,
     /// Each entry's floods, both ways.
     floods: Vec<[Below; 2]>,
 }
+
+/// A candidate's index among the pairs, its bodies and its walks.
+type Entry = (u32, (u32, u32), Hints);
 
 impl CentreWalks {
     fn update(&mut self, ctx: &StepContext) {
@@ -107,7 +110,7 @@ impl CentreWalks {
         self.list.clear();
         let candidates = ctx.pairs.iter().enumerate().filter(|(_, p)| p.is_candidate());
         self.list.extend(candidates.map(|(i, p)| (i as u32, (p.a, p.b), [None; 2])));
-        let walk = |e: &mut (u32, (u32, u32), Hints)| e.2 = centre_walks(posed.get(e.1.0), posed.get(e.1.1));
+        let walk = |e: &mut Entry| e.2 = centre_walks(posed.get(e.1.0), posed.get(e.1.1));
         self.list.par_iter_mut().for_each(walk);
         // The buffers stay, for the next step's floods.
         self.floods.resize_with(self.list.len(), Default::default);
