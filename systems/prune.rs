@@ -212,11 +212,9 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let mut touching = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().touching);
     let step = ctx.step;
     ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut speculative);
-    // Resting pairs of small meshes that keep their points skip the proofs too (`take_recycled`).
+    // Resting pairs of small meshes that keep their points skip the proofs too (`recycled_state`),
+    // in the same pass as the box pairs' proofs.
     let judged = judge_recycling(ctx);
-    if judged {
-        take_recycled(ctx, true);
-    }
     let (b, meshes, params) = (&ctx.bodies, &ctx.meshes, &ctx.params);
     let all_rest = params.resting_contacts(ctx.dt, 0.0);
     let margin = |p: &Pair| pair_margin(p, b, meshes, params, (all_rest, &speculative));
@@ -228,8 +226,16 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
             half,
         })
     };
-    ctx.pairs.par_iter_mut().filter(|p| p.is_candidate()).for_each(|pair| {
-        if let (Some(ba), Some(bb)) = (as_box(pair.a), as_box(pair.b)) {
+    let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
+    // `judge_recycling` left each pair's cache entry in `cached`.
+    let cached = ctx.scratch.get::<PruneScratch>().map_or(&[][..], |p| &p.cached[..]);
+    let verdicts = ctx.scratch.get::<SolveScratch>().filter(|_| judged);
+    ctx.pairs.par_iter_mut().enumerate().filter(|(_, p)| p.is_candidate()).for_each(|(k, pair)| {
+        let recycled =
+            verdicts.filter(|_| !many(pair.a) && !many(pair.b)).and_then(|s| recycled_state(s, cached[k], step));
+        if let Some(state) = recycled {
+            pair.state = state;
+        } else if let (Some(ba), Some(bb)) = (as_box(pair.a), as_box(pair.b)) {
             classify(pair, margin(pair), |m| boxes_separated_by(&ba, &bb, m));
         }
     });
@@ -314,7 +320,7 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let scratch = ctx.scratch.get_mut::<PruneScratch>();
     (scratch.speculative, scratch.touching) = (speculative, touching);
     if judged {
-        take_recycled(ctx, false);
+        take_recycled(ctx);
     }
 }
 
@@ -367,32 +373,36 @@ fn judge_recycling(ctx: &mut StepContext) -> bool {
     true
 }
 
-/// Takes the candidate pairs whose points `solve` will recycle (`judge_recycling`) out of the
-/// paper's tests: each is given the verdict the tests gave when they last ran on it and the
-/// recycled contact, which is all `solve` reads of them there (docs/physics.md §6.3). A pair no
-/// test found last time (held as near) is tested again, to see it touch. With `small_only`,
-/// the pairs of two small meshes, before their separation proofs: a pair that keeps its points
-/// is held or let go by `solve` from those points alone, so proving it apart would only drop
-/// it a step early. Without, the pairs with a many-faced body, after their GJK (whose records
-/// and retest turns stay as they were).
-fn take_recycled(ctx: &mut StepContext, small_only: bool) {
+/// The state of a candidate pair whose points `solve` will recycle (`judge_recycling`), which
+/// takes it out of the paper's tests: the verdict the tests gave when they last ran on it with
+/// the recycled contact, which is all `solve` reads of it there (docs/physics.md §6.3). `None`
+/// for a pair that keeps no points, or that no test found last time (held as near: it is
+/// tested again, to see it touch). `entry`: the pair's entry in `solve`'s cache.
+///
+/// The pairs of two small meshes are taken before their separation proofs (a pair that keeps
+/// its points is held or let go by `solve` from those points alone, so proving it apart would
+/// only drop it a step early); those with a many-faced body after their GJK, whose records and
+/// retest turns stay as they were (`take_recycled`).
+fn recycled_state(s: &SolveScratch, entry: u32, step: u64) -> Option<PairState> {
+    let (kept, r) = (&s.cache.get(entry as usize)?.1, &s.recycling[entry as usize]);
+    let (feature, contact, _) = (kept.found?, r.contact?, r.step.filter(|&t| t == step)?);
+    Some(PairState::Found(Contact { feature, ..contact }))
+}
+
+/// `recycled_state` for the candidate pairs with a many-faced body, after their GJK.
+fn take_recycled(ctx: &mut StepContext) {
     let (step, b, meshes) = (ctx.step, &ctx.bodies, &ctx.meshes);
     let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
-    // The second call looks only at the pairs the first left alone.
-    let taken = |p: &Pair| p.is_candidate() && (many(p.a) || many(p.b)) != small_only;
-    if !small_only && !ctx.pairs.iter().any(taken) {
+    let taken = |p: &Pair| p.is_candidate() && (many(p.a) || many(p.b));
+    if !ctx.pairs.iter().any(taken) {
         return;
     }
     let mut cached = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().cached);
     let s = ctx.scratch.get_mut::<SolveScratch>();
-    // The first call comes straight after `judge_recycling`, on the same pairs.
-    if !small_only {
-        cache_entries(&s.cache, &ctx.pairs, &mut cached);
-    }
-    for (pair, &entry) in ctx.pairs.iter_mut().zip(&cached).filter(|(p, e)| **e != u32::MAX && taken(p)) {
-        let (kept, r) = (&s.cache[entry as usize].1, &s.recycling[entry as usize]);
-        if let (Some(feature), Some(contact), Some(_)) = (kept.found, r.contact, r.step.filter(|&t| t == step)) {
-            pair.state = PairState::Found(Contact { feature, ..contact });
+    cache_entries(&s.cache, &ctx.pairs, &mut cached);
+    for (pair, &entry) in ctx.pairs.iter_mut().zip(&cached).filter(|(p, _)| taken(p)) {
+        if let Some(state) = recycled_state(s, entry, step) {
+            pair.state = state;
         }
     }
     ctx.scratch.get_mut::<PruneScratch>().cached = cached;
