@@ -122,15 +122,15 @@ impl Bodies {
             [("velocity", &self.velocity), ("angular_velocity", &self.angular_velocity), ("position", &self.position)];
         // Cheap pass first: a sum is finite iff every term is (a NaN or ∞ survives addition
         // unless ∞ − ∞, which is itself NaN, and an overflow only sends it to the search); the
-        // search below runs only on failure. Each row's terms go to four sums, not one chain
-        // of additions: the guard runs after every system.
-        let rows = self.velocity.iter().zip(&self.angular_velocity).zip(&self.position).zip(&self.orientation);
-        let (mut sum, mut last) = (Vector::ZERO, 0.0);
-        for (((v, w), x), q) in rows {
-            sum += *v + *w;
-            last += x.element_sum() + (q.x + q.y) + (q.z + q.w);
-        }
-        if (sum.element_sum() + last).is_finite() {
+        // search below runs only on failure. The guard runs after every system, so each array
+        // is summed in four independent chains (`sum4`), not one chain of dependent additions.
+        let sums = [
+            sum4(&self.velocity, |v| v.element_sum()),
+            sum4(&self.angular_velocity, |w| w.element_sum()),
+            sum4(&self.position, |x| x.element_sum()),
+            sum4(&self.orientation, |q| (q.x + q.y) + (q.z + q.w)),
+        ];
+        if ((sums[0] + sums[1]) + (sums[2] + sums[3])).is_finite() {
             return None;
         }
         (0..self.len()).find_map(|i| {
@@ -171,6 +171,19 @@ pub fn rotate_tensor(orientation: Quat, m: Mat3) -> Mat3 {
         && m.y_axis.y == m.z_axis.z
         && [m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.z, m.z_axis.x, m.z_axis.y].iter().all(|&x| x == 0.0);
     if isotropic { m } else { world_inverse_inertia(orientation, m) }
+}
+
+/// The sum of `f` over `items` in four chains, one per item modulo four.
+fn sum4<T>(items: &[T], f: impl Fn(&T) -> Scalar) -> Scalar {
+    let mut chains = [0.0; 4];
+    let quads = items.chunks_exact(4);
+    let rest: Scalar = quads.remainder().iter().map(&f).sum();
+    for quad in quads {
+        for (chain, item) in chains.iter_mut().zip(quad) {
+            *chain += f(item);
+        }
+    }
+    (chains[0] + chains[1]) + (chains[2] + chains[3]) + rest
 }
 
 #[cfg(test)]
