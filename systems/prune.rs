@@ -240,6 +240,14 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
+    // A resting pile of small meshes: each pair kept its points or was proved apart, and none
+    // has a GJK record to carry over, so nothing is left to pose or prove.
+    let scratch = ctx.scratch.get_mut::<PruneScratch>();
+    if scratch.starts.is_empty() && !ctx.pairs.iter().any(Pair::is_candidate) {
+        touching.clear();
+        (scratch.speculative, scratch.touching) = (speculative, touching);
+        return;
+    }
     // Small meshes are posed whole; many-faced ones are left unposed (`Placed`): their GJK and
     // bounds walk the body-frame vertices, and the tests and `solve` pose only the bodies of
     // the pairs they take (a recycled pair's need none).
