@@ -299,8 +299,15 @@ fn substeps(ctx: &mut StepContext, joints: &mut Joints) {
     let soft = Softness::new(h);
     let s = ctx.scratch.get_mut::<SolveScratch>();
     let mut plan = vec![Step::Push(-params.gravity * dt)];
+    // Without joints, a substep after the first starts from the last one's velocities
+    // (`Step::Repeat`) instead of a warm-start pass over the constraints.
+    let repeat = joints.joints.is_empty();
     for k in 0..count {
-        plan.extend([Step::Push(params.gravity * h), Step::Pass(Pass::Warm)]);
+        match (k, repeat) {
+            (0, true) => plan.extend([Step::Keep, Step::Push(params.gravity * h), Step::Pass(Pass::Warm)]),
+            (_, true) => plan.push(Step::Repeat),
+            (_, false) => plan.extend([Step::Push(params.gravity * h), Step::Pass(Pass::Warm)]),
+        }
         plan.extend((0..params.sweeps(k)).map(|_| Step::Pass(Pass::Solve(soft))));
         plan.extend([Step::Move(h), Step::Pass(Pass::Relax)]);
     }

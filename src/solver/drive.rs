@@ -27,6 +27,15 @@ pub(crate) enum Step {
     Push(Vector),
     /// Move every free body on by its velocity over this time [s].
     Move(Scalar),
+    /// Keep every free body's velocities, for the next `Repeat`.
+    Keep,
+    /// Start a substep by re-applying, body by body, what the last one applied: velocities v
+    /// become v + (v − v_kept), and are kept. Over a substep a body's velocities change by
+    /// gravity's share plus M⁻¹Jᵀλ for the rows' accumulated impulses λ (the warm start applies
+    /// the λ of the substep before, each sweep its change), and levers and normals stay fixed
+    /// through the step; so this is `Push` then `Pass(Warm)`, to rounding, without a pass over
+    /// the constraints. Not for joints, whose passes alone warm-start them.
+    Repeat,
 }
 
 /// Runs `pass` on `group` with its bodies `bodies`; `fresh`: the bodies have moved since the
@@ -40,14 +49,21 @@ fn run<B: BodyStore + ?Sized>(pass: Pass, bodies: &mut B, group: &mut Constraint
     }
 }
 
-/// Applies a body step to the free bodies of one side (its last slot is static).
-fn apply(step: Step, side: &mut [SolverBody]) {
+/// Applies a body step to the free bodies of one side (its last slot is static), with their
+/// kept velocities `kept` (`Step::Keep`).
+fn apply(step: Step, side: &mut [SolverBody], kept: &mut [[Vector; 2]]) {
     let free = side.len() - 1;
     match step {
         Step::Push(dv) => side[..free].iter_mut().for_each(|b| b.v += dv),
         Step::Move(h) => side[..free].iter_mut().for_each(|b| {
             b.dx += b.v * h;
             b.dq += b.w * h;
+        }),
+        Step::Keep => side[..free].iter().zip(kept.iter_mut()).for_each(|(b, k)| *k = [b.v, b.w]),
+        Step::Repeat => side[..free].iter_mut().zip(kept.iter_mut()).for_each(|(b, k)| {
+            let now = [b.v, b.w];
+            (b.v, b.w) = (b.v + (b.v - k[0]), b.w + (b.w - k[1]));
+            *k = now;
         }),
         Step::Pass(_) => {}
     }
@@ -62,15 +78,17 @@ fn apply(step: Step, side: &mut [SolverBody]) {
 /// After each pass over the contacts, the joints (if any) take theirs, in scene order, over
 /// both sides' bodies (`joint_pass`): joints and contacts converge together.
 pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut Joints) {
+    s.kept.resize(s.bodies.len(), [Vector::ZERO; 2]);
     let [first, second, across] = &mut s.groups;
     let (left, right) = s.bodies.split_at_mut(s.left + 1);
+    let (kept_left, kept_right) = s.kept.split_at_mut(s.left + 1);
     let threaded = !second.batches.is_empty() && rayon::current_num_threads() > 1;
     // The gaps change only with a move: the first sweep after one works them out for the rest.
     let mut moved = true;
     for &step in plan {
         let Step::Pass(pass) = step else {
-            apply(step, left);
-            apply(step, right);
+            apply(step, left, kept_left);
+            apply(step, right, kept_right);
             joints.stale |= matches!(step, Step::Move(_));
             moved |= matches!(step, Step::Move(_));
             continue;

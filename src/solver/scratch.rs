@@ -182,6 +182,9 @@ pub struct SolveScratch {
     pub speculative: Vec<Scalar>,
     /// S = (I⁻¹)^½ in world axes of each solver body (zero for the static slots).
     pub scale: Vec<Mat3>,
+    /// Scratch of the substeps: each solver body's velocities (v, ŵ) when last kept
+    /// (`drive::Step::Keep`).
+    pub kept: Vec<[Vector; 2]>,
     /// The actors the joints hold, each once, in order of first mention (empty without
     /// joints): they get solver bodies whether or not they touch anything.
     pub jointed: Vec<u32>,
