@@ -210,7 +210,9 @@ fn points_of<'a>(batch: &Batch, points: &'a mut [PointRows]) -> &'a mut [PointRo
 }
 
 /// Re-applies each row's accumulated impulse (the previous substep's, or the previous step's
-/// at the first substep): a resting stack starts each substep near its solution.
+/// at the first substep): a resting stack starts each substep near its solution. `solve` runs
+/// it at the first substep only, unless there are joints; later substeps do the same body by
+/// body (`drive::Step::Repeat`).
 pub fn warm_start<B: BodyStore + ?Sized>(bodies: &mut B, batches: &[Batch], points: &mut [PointRows]) {
     for batch in batches {
         let mut lane_bodies = LaneBodies::open(bodies, batch);
