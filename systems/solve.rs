@@ -30,7 +30,7 @@ use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
 use crate::solver::{CachedManifold, ContactAnchors, Recycling, SolveScratch, cache_entries, recycle_four};
-use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prepare_joints};
+use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prepare_joints, substep_plan};
 use hecs::World;
 use rayon::prelude::*;
 
@@ -302,15 +302,7 @@ fn substeps(ctx: &mut StepContext, joints: &mut Joints) {
     // Without joints, a substep after the first starts from the last one's velocities
     // (`Step::Repeat`) instead of a warm-start pass over the constraints.
     let repeat = joints.joints.is_empty();
-    for k in 0..count {
-        match (k, repeat) {
-            (0, true) => plan.extend([Step::Keep, Step::Push(params.gravity * h), Step::Pass(Pass::Warm)]),
-            (_, true) => plan.push(Step::Repeat),
-            (_, false) => plan.extend([Step::Push(params.gravity * h), Step::Pass(Pass::Warm)]),
-        }
-        plan.extend((0..params.sweeps(k)).map(|_| Step::Pass(Pass::Solve(soft))));
-        plan.extend([Step::Move(h), Step::Pass(Pass::Relax)]);
-    }
+    plan.extend(substep_plan(count, |k| params.sweeps(k), (h, soft), params.gravity * h, repeat));
     plan.push(Step::Pass(Pass::Restitution(params.restitution_threshold(dt))));
     drive(s, &plan, h, joints);
     // Worked out in parallel (a rotation each), then written in place.

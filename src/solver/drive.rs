@@ -38,6 +38,30 @@ pub(crate) enum Step {
     Repeat,
 }
 
+/// The passes and body steps of `substeps` substeps of length `h`: each adds gravity's share
+/// `push`, warm-starts, runs `sweeps(k)` solve sweeps with spring `soft` in substep k, moves
+/// the bodies and relaxes. With `repeat`, substeps after the first take the push and the
+/// warm start body by body (`Step::Repeat`); without (joints), by the passes.
+pub(crate) fn substep_plan(
+    substeps: u32,
+    sweeps: impl Fn(u32) -> u32,
+    (h, soft): (Scalar, Softness),
+    push: Vector,
+    repeat: bool,
+) -> Vec<Step> {
+    let mut plan = Vec::new();
+    for k in 0..substeps {
+        match (k, repeat) {
+            (0, true) => plan.extend([Step::Keep, Step::Push(push), Step::Pass(Pass::Warm)]),
+            (_, true) => plan.push(Step::Repeat),
+            (_, false) => plan.extend([Step::Push(push), Step::Pass(Pass::Warm)]),
+        }
+        plan.extend((0..sweeps(k)).map(|_| Step::Pass(Pass::Solve(soft))));
+        plan.extend([Step::Move(h), Step::Pass(Pass::Relax)]);
+    }
+    plan
+}
+
 /// Runs `pass` on `group` with its bodies `bodies`; `fresh`: the bodies have moved since the
 /// last sweep, which must work the gaps out again (`kernel::sweep`).
 fn run<B: BodyStore + ?Sized>(pass: Pass, bodies: &mut B, group: &mut ConstraintGroup, h: Scalar, fresh: bool) {

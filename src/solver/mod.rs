@@ -43,7 +43,7 @@ mod regs;
 mod scratch;
 
 pub(crate) use constraints::build_constraints;
-pub(crate) use drive::{Pass, Step, drive};
+pub(crate) use drive::{Pass, Step, drive, substep_plan};
 pub(crate) use joint_pass::prepare as prepare_joints;
 pub use joints::{Frame, Joint, JointImpulses, JointKind, Joints, Motor, Spring};
 pub use kernel::{restitution, sweep, warm_start};

@@ -326,36 +326,6 @@ proptest! {
         let result = compare(&bodies, &pairs, h, threshold);
         prop_assert!(result.is_ok(), "{}", result.unwrap_err());
     }
-}
-
-/// The solver bodies after three substeps (gravity's push, the warm start, a solve sweep, the
-/// move and the relax sweep each), carried out by `drive` on the constraints of `pairs` in one
-/// group of bodies `bodies` (the static slot last); with `repeat`, the second and third start
-/// with `Step::Repeat` instead of the push and the warm-start pass.
-fn driven(bodies: &[SolverBody], pairs: &[PairRows], h: Scalar, repeat: bool) -> Vec<SolverBody> {
-    use crate::solver::{Pass, Step as Plan};
-    // The second side empty: its static slot only.
-    let static_slot = bodies.len() - 1;
-    let mut s = crate::solver::SolveScratch { bodies: bodies.to_vec(), left: static_slot, ..Default::default() };
-    s.bodies.push(SolverBody::default());
-    s.groups[0] = lay_out(pairs, static_slot as u32);
-    let (soft, g) = (Softness::new(h), Vector::new(0.3, -9.81, 0.2) * h);
-    let mut plan = vec![];
-    for k in 0..3 {
-        match (k, repeat) {
-            (0, true) => plan.extend([Plan::Keep, Plan::Push(g), Plan::Pass(Pass::Warm)]),
-            (_, true) => plan.push(Plan::Repeat),
-            (_, false) => plan.extend([Plan::Push(g), Plan::Pass(Pass::Warm)]),
-        }
-        plan.extend([Plan::Pass(Pass::Solve(soft)), Plan::Move(h), Plan::Pass(Pass::Relax)]);
-    }
-    crate::solver::drive(&mut s, &plan, h, &mut crate::solver::Joints::default());
-    s.bodies.truncate(bodies.len());
-    s.bodies
-}
-
-proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
 
     /// `Step::Repeat` (a substep re-applies, body by body, what the last one applied) gives
     /// the velocities of gravity's push and a warm-start pass, to rounding: random
@@ -374,6 +344,23 @@ proptest! {
             prop_assert!(off <= 1e-12 * scale, "body {k}: {a:?} against {b:?}");
         }
     }
+}
+
+/// The solver bodies after three substeps (gravity's push, the warm start, a solve sweep, the
+/// move and the relax sweep each), carried out by `drive` on the constraints of `pairs` in one
+/// group of bodies `bodies` (the static slot last); with `repeat`, the second and third start
+/// with `Step::Repeat` instead of the push and the warm-start pass.
+fn driven(bodies: &[SolverBody], pairs: &[PairRows], h: Scalar, repeat: bool) -> Vec<SolverBody> {
+    // The second side empty: its static slot only.
+    let static_slot = bodies.len() - 1;
+    let mut s = crate::solver::SolveScratch { bodies: bodies.to_vec(), left: static_slot, ..Default::default() };
+    s.bodies.push(SolverBody::default());
+    s.groups[0] = lay_out(pairs, static_slot as u32);
+    let g = Vector::new(0.3, -9.81, 0.2) * h;
+    let plan = crate::solver::substep_plan(3, |_| 1, (h, Softness::new(h)), g, repeat);
+    crate::solver::drive(&mut s, &plan, h, &mut crate::solver::Joints::default());
+    s.bodies.truncate(bodies.len());
+    s.bodies
 }
 
 /// A lone body, mass 2, and the static slot under it; one point on the normal through its
