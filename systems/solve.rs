@@ -79,7 +79,7 @@ pub fn solve(_world: &mut World, ctx: &mut StepContext) {
     find_manifolds(ctx);
     build_constraints(ctx);
     let s = ctx.scratch.get_mut::<SolveScratch>();
-    (ctx.stats.held, ctx.stats.split) = (s.held.len(), !s.groups[1].batches.is_empty());
+    (ctx.stats.held, ctx.stats.split) = (s.held.len(), s.split);
     prepare_joints(&mut joints, &ctx.bodies, &s.slot, &s.scale, s.bodies.len() as u32 - 1);
     substeps(ctx, &mut joints);
     remember(ctx);

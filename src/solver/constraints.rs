@@ -39,10 +39,16 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     sort_from_last_order(s);
     gather_bodies(b, s);
     // Each constraint's group: within the first side, within the second, or across; then its
-    // batches, each group placed on its own.
+    // batches, each group placed on its own. One thread solves the sides one after the other:
+    // then both go in the first group, numbered across both sides as the constraints across
+    // are. The sides share no free body, so each constraint meets its bodies in the same order
+    // and does the same arithmetic (the same bits), and the batches, which one side's chains
+    // of contacts leave a quarter empty, fill up with the other side's constraints.
+    s.merged = s.left < s.moving.len() && rayon::current_num_threads() == 1;
+    s.split = false;
     let (left, last) = (s.left as u32, s.bodies.len() as u32 - 1);
     s.groups[0].offset = 0;
-    s.groups[0].static_slot = left;
+    s.groups[0].static_slot = if s.merged { last } else { left };
     s.groups[1].offset = left + 1;
     s.groups[1].static_slot = last - (left + 1);
     s.groups[2].offset = 0;
@@ -60,6 +66,8 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
             (Some(false), Some(false) | None) | (None, Some(false)) | (None, None) => 0,
             _ => 2,
         };
+        s.split |= group == 1;
+        let group = if s.merged && group == 1 { 0 } else { group };
         let g = &mut s.groups[group];
         let local = |i: u32| if i == left || i == last { g.static_slot } else { i - g.offset };
         let slot = [local(slot[0]), local(slot[1])];

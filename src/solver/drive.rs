@@ -98,18 +98,20 @@ fn apply(step: Step, side: &mut [SolverBody], kept: &mut [[Vector; 2]]) {
 /// across. With two threads the two sides run as a rayon join: the pool's other thread, kept
 /// awake through the step (`schedule`), takes the second side at once, and when it is busy or
 /// off its core (a machine loaded with other work) this thread runs both sides itself instead
-/// of waiting. Either way the arithmetic is the same, so the result does not depend on threads.
+/// of waiting. On one thread the sides' constraints are one group (`SolveScratch::merged`),
+/// solved over all the bodies at once. Either way the arithmetic is the same, so the result
+/// does not depend on threads.
 /// After each pass over the contacts, the joints (if any) take theirs, in scene order, over
 /// both sides' bodies (`joint_pass`): joints and contacts converge together.
 pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut Joints) {
     s.kept.resize(s.bodies.len(), [Vector::ZERO; 2]);
-    let [first, second, across] = &mut s.groups;
-    let (left, right) = s.bodies.split_at_mut(s.left + 1);
-    let (kept_left, kept_right) = s.kept.split_at_mut(s.left + 1);
+    let SolveScratch { groups: [first, second, across], bodies, kept, left: cut, merged, .. } = s;
+    let (kept_left, kept_right) = kept.split_at_mut(*cut + 1);
     let threaded = !second.batches.is_empty() && rayon::current_num_threads() > 1;
     // The gaps change only with a move: the first sweep after one works them out for the rest.
     let mut moved = true;
     for &step in plan {
+        let (left, right) = bodies.split_at_mut(*cut + 1);
         let Step::Pass(pass) = step else {
             apply(step, left, kept_left);
             apply(step, right, kept_right);
@@ -119,15 +121,22 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
         };
         let fresh = moved && matches!(pass, Pass::Solve(_) | Pass::Relax);
         moved &= !fresh;
-        if threaded {
-            rayon::join(|| run(pass, left, first, h, fresh), || run(pass, right, second, h, fresh));
+        if *merged {
+            // Both sides' constraints in one group, numbered across both (`build_constraints`).
+            run(pass, &mut bodies[..], first, h, fresh);
+            run(pass, &mut bodies[..], across, h, fresh);
         } else {
-            run(pass, left, first, h, fresh);
-            run(pass, right, second, h, fresh);
+            if threaded {
+                rayon::join(|| run(pass, left, first, h, fresh), || run(pass, right, second, h, fresh));
+            } else {
+                run(pass, left, first, h, fresh);
+                run(pass, right, second, h, fresh);
+            }
+            if !across.batches.is_empty() {
+                run(pass, &mut Sides { left: &mut *left, right: &mut *right }, across, h, fresh);
+            }
         }
-        if !across.batches.is_empty() {
-            run(pass, &mut Sides { left: &mut *left, right: &mut *right }, across, h, fresh);
-        }
+        let (left, right) = bodies.split_at_mut(*cut + 1);
         let joint = match pass {
             Pass::Warm => Some(JointPass::Warm),
             Pass::Solve(_) => Some(JointPass::Solve),

@@ -165,6 +165,11 @@ pub struct SolveScratch {
     pub moving: Vec<u32>,
     /// Free bodies on the first side; solver body `left` is that side's static slot.
     pub left: usize,
+    /// The second side holds constraints: the scene is cut in two (`constraints::gather_bodies`).
+    pub split: bool,
+    /// Both sides' constraints are in the first group, numbered across both sides (one thread
+    /// solves them; `build_constraints`).
+    pub merged: bool,
     /// Scratch: each moving body's velocity, angular velocity, position and orientation after
     /// the substeps, found in parallel and then written to the bodies.
     pub after: Vec<(Vector, Vector, Vector, Quat)>,
