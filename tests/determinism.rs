@@ -66,6 +66,37 @@ fn a_pyramid_solved_in_two_sides_is_bit_identical_on_one_thread_or_two() {
 }
 
 #[test]
+fn one_thread_places_both_sides_in_shared_batches() {
+    // On one thread the two sides' constraints are placed as one group: the same constraints
+    // in fewer batches (a side's rows chain body to body and leave lanes empty), with the same
+    // bits as two threads (the test above).
+    use rigid_sandbox::solver::SolveScratch;
+    let batches = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        pool.install(|| {
+            let mut sim = rigid_sandbox::scene::benchmarks::scene_sim(
+                rigid_sandbox::scene::benchmarks::BenchScene::Pyramid,
+                20,
+                1,
+            );
+            sim.run(10).expect("finite");
+            let s = sim.ctx.scratch.get::<SolveScratch>().expect("solve ran");
+            let [first, second, across] = &s.groups;
+            let lanes =
+                |g: &rigid_sandbox::solver::ConstraintGroup| g.fill.iter().map(|&f| usize::from(f)).sum::<usize>();
+            assert_eq!(lanes(first) + lanes(second) + lanes(across), s.held.len(), "every held pair placed once");
+            (s.merged, second.batches.is_empty(), first.batches.len() + second.batches.len())
+        })
+    };
+    let (merged, second_empty, one) = batches(1);
+    assert!(merged && second_empty, "one thread: one group for both sides");
+    let (merged, second_empty, two) = batches(2);
+    assert!(!merged && !second_empty, "two threads: a group a side");
+    // B = 20: 146 batches against 95 + 93.
+    assert!(one * 10 < two * 8, "shared batches fill up: {one} against {two}");
+}
+
+#[test]
 fn pyramids_stepped_side_by_side_in_one_pool_match_each_alone() {
     // A user may step several sims at once in one pool's parallel loop: each still gives its
     // own bits, and none waits for ever on the threads another step keeps awake.
