@@ -150,11 +150,13 @@ pub fn boxes_separated_by(a: &BoxPose, b: &BoxPose, [wide, proof]: [Scalar; 2]) 
 /// `solve` still sees them while apart by less (a micro-bounce must not lose a stack's
 /// contact); apart by more than the second, no detection test can fire (`separated`).
 /// `speculative` holds each body's speculative distance; `all_rest` says whether every pair
-/// may rest (`Params::resting_contacts` with no friction), worked out once, not per pair.
+/// may rest (`Params::resting_contacts` with no friction), worked out once, not per pair;
+/// `thin` is the thinner body's thickness (`Bodies::thinner`).
+#[inline]
 fn pair_margin(
     p: &Pair,
     b: &Bodies,
-    meshes: &MeshTable,
+    thin: Scalar,
     params: &Params,
     (all_rest, speculative): (bool, &[Scalar]),
 ) -> (Scalar, Scalar) {
@@ -162,7 +164,7 @@ fn pair_margin(
     let proof = PRUNE_MARGIN * (b.radius[ia] + b.radius[ib]);
     if all_rest || b.pair_friction(ia, ib) > 0.0 {
         let speculative = speculative[ia] + speculative[ib];
-        (proof.max(params.contact_margin * b.thinner(meshes, ia, ib) + speculative), proof)
+        (proof.max(params.contact_margin * thin + speculative), proof)
     } else {
         (proof, proof)
     }
@@ -217,26 +219,23 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let judged = judge_recycling(ctx);
     let (b, meshes, params) = (&ctx.bodies, &ctx.meshes, &ctx.params);
     let all_rest = params.resting_contacts(ctx.dt, 0.0);
-    let margin = |p: &Pair| pair_margin(p, b, meshes, params, (all_rest, &speculative));
-    let as_box = |i: u32| {
-        let i = i as usize;
-        meshes.get(b.mesh[i]).box_half_extents.map(|half| BoxPose {
-            position: b.position[i],
-            rotation: b.rotation[i],
-            half,
-        })
-    };
-    let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
+    let pose =
+        |i: u32, half: Vector| BoxPose { position: b.position[i as usize], rotation: b.rotation[i as usize], half };
     // `judge_recycling` left each pair's cache entry in `cached`.
     let cached = ctx.scratch.get::<PruneScratch>().map_or(&[][..], |p| &p.cached[..]);
     let verdicts = ctx.scratch.get::<SolveScratch>().filter(|_| judged);
     ctx.pairs.par_iter_mut().enumerate().filter(|(_, p)| p.is_candidate()).for_each(|(k, pair)| {
-        let recycled =
-            verdicts.filter(|_| !many(pair.a) && !many(pair.b)).and_then(|s| recycled_state(s, cached[k], step));
+        // Each body's mesh looked up once, for all three questions.
+        let (ma, mb) = (meshes.get(b.mesh[pair.a as usize]), meshes.get(b.mesh[pair.b as usize]));
+        let small = !ma.is_many_faced() && !mb.is_many_faced();
+        let recycled = verdicts.filter(|_| small).and_then(|s| recycled_state(s, cached[k], step));
         if let Some(state) = recycled {
             pair.state = state;
-        } else if let (Some(ba), Some(bb)) = (as_box(pair.a), as_box(pair.b)) {
-            classify(pair, margin(pair), |m| boxes_separated_by(&ba, &bb, m));
+        } else if let (Some(ha), Some(hb)) = (ma.box_half_extents, mb.box_half_extents) {
+            let thin = ma.thickness.min(mb.thickness);
+            let margins = pair_margin(pair, b, thin, params, (all_rest, &speculative));
+            let (ba, bb) = (pose(pair.a, ha), pose(pair.b, hb));
+            classify(pair, margins, |m| boxes_separated_by(&ba, &bb, m));
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
@@ -277,7 +276,8 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     });
     let bounds = &*bounds;
     let (posed, params) = (&ctx.posed, &ctx.params);
-    let margin = |p: &Pair| pair_margin(p, b, meshes, params, (all_rest, &speculative));
+    let margin =
+        |p: &Pair| pair_margin(p, b, b.thinner(meshes, p.a as usize, p.b as usize), params, (all_rest, &speculative));
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     let shape = |i: u32| if many(i) { Shape::Placed(placed(i as usize)) } else { Shape::Posed(posed.get(i)) };
     let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };
