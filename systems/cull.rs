@@ -304,14 +304,20 @@ impl PairCache {
         self.served = 1;
     }
 
-    /// Appends the kept pairs that pass `cull_all_pairs`'s test today.
+    /// Appends the kept pairs that pass `cull_all_pairs`'s test today. Every kept pair is
+    /// written and the count moved on past those that pass: about half of a resting rain's
+    /// 12 000 pass, at random, and a branch on each, mispredicted that often, cost more.
     fn filter(&self, b: &Bodies, reach: &[Scalar], out: &mut Vec<Pair>) {
+        let start = out.len();
+        out.resize(start + self.pairs.len(), Pair::candidate(0, 1));
+        let mut n = start;
         for &(i, j) in &self.pairs {
             let (a, c) = (i as usize, j as usize);
-            if !(b.is_fixed(a) && b.is_fixed(c)) && spheres_overlap(b.position[a], reach[a], b.position[c], reach[c]) {
-                out.push(Pair::candidate(i, j));
-            }
+            out[n] = Pair::candidate(i, j);
+            let overlap = spheres_overlap(b.position[a], reach[a], b.position[c], reach[c]);
+            n += usize::from(overlap & !(b.is_fixed(a) & b.is_fixed(c)));
         }
+        out.truncate(n);
     }
 }
 
@@ -414,15 +420,21 @@ impl Grid {
     ) {
         let (xi, ri, fixed_i) = (b.position[i], radius[i], b.is_fixed(i));
         // The candidate test of `cull_all_pairs`, given body j's centre, radius and fixedness.
-        let consider = |j: usize, xj: Vector, rj: Scalar, fixed_j: bool, out: &mut Vec<(u32, u32)>| {
-            if j > i && !(fixed_i && fixed_j) && spheres_overlap(xi, ri, xj, rj) {
-                out.push((i as u32, j as u32));
-            }
+        // Every body tested is written after the last candidate and counted only if it is one:
+        // which neighbours pass is close to random, and a branch on it would be mispredicted
+        // about as often as not.
+        let mut n = out.len();
+        let consider = |n: usize, (j, xj, rj, fixed_j): (usize, Vector, Scalar, bool), out: &mut [(u32, u32)]| {
+            out[n] = (i as u32, j as u32);
+            n + usize::from((j > i) & !(fixed_i & fixed_j) & spheres_overlap(xi, ri, xj, rj))
         };
-        let consider_row =
-            |j: usize, out: &mut Vec<(u32, u32)>| consider(j, b.position[j], radius[j], b.is_fixed(j), out);
+        let row_of = |j: usize| (j, b.position[j], radius[j], b.is_fixed(j));
         if ri > self.threshold {
-            (i + 1..b.len()).for_each(|j| consider_row(j, out));
+            out.resize(n + b.len() - (i + 1), (0, 0));
+            for j in i + 1..b.len() {
+                n = consider(n, row_of(j), out);
+            }
+            out.truncate(n);
             return;
         }
         let c = self.coords(xi);
@@ -431,14 +443,18 @@ impl Grid {
             for y in range(1) {
                 let row = self.index([0, y, z]);
                 let (x0, x1) = (*range(0).start(), *range(0).end());
-                for e in &order[start[row + x0] as usize..start[row + x1 + 1] as usize] {
-                    consider(e.index as usize, e.position, e.radius, e.fixed, out);
+                let cells = &order[start[row + x0] as usize..start[row + x1 + 1] as usize];
+                out.resize(n + cells.len(), (0, 0));
+                for e in cells {
+                    n = consider(n, (e.index as usize, e.position, e.radius, e.fixed), out);
                 }
             }
         }
+        out.resize(n + large.len(), (0, 0));
         for &j in large {
-            consider_row(j as usize, out);
+            n = consider(n, row_of(j as usize), out);
         }
+        out.truncate(n);
     }
 }
 
