@@ -45,19 +45,23 @@ fn box_gas_hash_is_pinned() {
     assert_eq!(hash_with_threads(2, 120), PINNED_BOX_GAS_HASH, "got {:#018x}", hash_with_threads(2, 120));
 }
 
+/// The 20-row pyramid (590 constraints, enough for `solve` to split them in two sides and
+/// solve both at once) after `steps` steps in a pool of `threads`, handed to `look`.
+fn pyramid_on<T: Send>(threads: usize, steps: u64, look: impl FnOnce(&rigid_sandbox::sim::Sim) -> T + Send) -> T {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+    pool.install(|| {
+        let mut sim =
+            rigid_sandbox::scene::benchmarks::scene_sim(rigid_sandbox::scene::benchmarks::BenchScene::Pyramid, 20, 1);
+        sim.run(steps).expect("finite");
+        look(&sim)
+    })
+}
+
 #[test]
 fn a_pyramid_solved_in_two_sides_is_bit_identical_on_one_thread_or_two() {
-    // 20 rows: 590 constraints, enough for `solve` to split them in two sides and solve both
-    // at once; the split follows the scene, never the thread count.
+    // The split follows the scene, never the thread count.
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-        pool.install(|| {
-            let mut sim = rigid_sandbox::scene::benchmarks::scene_sim(
-                rigid_sandbox::scene::benchmarks::BenchScene::Pyramid,
-                20,
-                1,
-            );
-            sim.run(40).expect("finite");
+        pyramid_on(threads, 40, |sim| {
             assert!(sim.ctx.stats.split, "split in two sides");
             state_hash(&sim.actors())
         })
@@ -70,20 +74,12 @@ fn one_thread_places_both_sides_in_shared_batches() {
     // On one thread the two sides' constraints are placed as one group: the same constraints
     // in fewer batches (a side's rows chain body to body and leave lanes empty), with the same
     // bits as two threads (the test above).
-    use rigid_sandbox::solver::SolveScratch;
+    use rigid_sandbox::solver::{ConstraintGroup, SolveScratch};
     let batches = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-        pool.install(|| {
-            let mut sim = rigid_sandbox::scene::benchmarks::scene_sim(
-                rigid_sandbox::scene::benchmarks::BenchScene::Pyramid,
-                20,
-                1,
-            );
-            sim.run(10).expect("finite");
+        pyramid_on(threads, 10, |sim| {
             let s = sim.ctx.scratch.get::<SolveScratch>().expect("solve ran");
             let [first, second, across] = &s.groups;
-            let lanes =
-                |g: &rigid_sandbox::solver::ConstraintGroup| g.fill.iter().map(|&f| usize::from(f)).sum::<usize>();
+            let lanes = |g: &ConstraintGroup| g.fill.iter().map(|&f| usize::from(f)).sum::<usize>();
             assert_eq!(lanes(first) + lanes(second) + lanes(across), s.held.len(), "every held pair placed once");
             (s.merged, second.batches.is_empty(), first.batches.len() + second.batches.len())
         })
