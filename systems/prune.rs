@@ -433,7 +433,8 @@ struct PruneScratch {
     touching: Vec<((u32, u32), ())>,
     /// Scratch: each pair's index in `touching` (`u32::MAX`: not there).
     resting: Vec<u32>,
-    /// Scratch of `take_recycled`: each pair's index in `solve`'s cache (`u32::MAX`: none).
+    /// Each pair's index in `solve`'s cache (`u32::MAX`: none), left by `judge_recycling` for the
+    /// box pairs' pass and found again by `take_recycled`; scratch for the GJK starts between.
     cached: Vec<u32>,
     /// Scratch: body i is a many-faced body of a candidate pair.
     wanted: Vec<bool>,

@@ -111,8 +111,8 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
     // The gaps change only with a move: the first sweep after one works them out for the rest.
     let mut moved = true;
     for &step in plan {
-        let (left, right) = bodies.split_at_mut(*cut + 1);
         let Step::Pass(pass) = step else {
+            let (left, right) = bodies.split_at_mut(*cut + 1);
             apply(step, left, kept_left);
             apply(step, right, kept_right);
             joints.stale |= matches!(step, Step::Move(_));
@@ -126,6 +126,7 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
             run(pass, &mut bodies[..], first, h, fresh);
             run(pass, &mut bodies[..], across, h, fresh);
         } else {
+            let (left, right) = bodies.split_at_mut(*cut + 1);
             if threaded {
                 rayon::join(|| run(pass, left, first, h, fresh), || run(pass, right, second, h, fresh));
             } else {
@@ -136,7 +137,6 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
                 run(pass, &mut Sides { left: &mut *left, right: &mut *right }, across, h, fresh);
             }
         }
-        let (left, right) = bodies.split_at_mut(*cut + 1);
         let joint = match pass {
             Pass::Warm => Some(JointPass::Warm),
             Pass::Solve(_) => Some(JointPass::Solve),
@@ -144,7 +144,8 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
             Pass::Restitution(_) => Some(JointPass::Relax),
         };
         if let Some(joint) = joint.filter(|_| !joints.joints.is_empty()) {
-            joint_pass(&mut Sides { left: &mut *left, right: &mut *right }, joints, joint, h);
+            let (left, right) = bodies.split_at_mut(*cut + 1);
+            joint_pass(&mut Sides { left, right }, joints, joint, h);
         }
     }
     store_impulses(joints);
