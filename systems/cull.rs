@@ -1,13 +1,16 @@
 //! `cull`: the broad phase. Bounding spheres about the centre of mass overlap
-//! (docs/physics.md §1.2, erratum E1). Two systems share the predicate and emit the same sorted pair
-//! list: `cull_all_pairs`, the paper's O(N²) loop kept as the reference, and `cull`, a uniform
-//! grid, near-linear in N.
+//! (docs/physics.md §1.2, erratum E1), and so do the bodies' world boxes widened by the
+//! margins `prune` holds pairs within (`Bounds`). Two systems share the predicate and emit the
+//! same sorted pair list: `cull_all_pairs`, the paper's O(N²) loop kept as the reference, and
+//! `cull`, a uniform grid, near-linear in N.
 
 use crate::collision::contact::Pair;
 use crate::math::{Scalar, Vector};
+use crate::model::mesh::MeshTable;
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
 use crate::solver::Joints;
+use crate::systems::prune::PRUNE_MARGIN;
 use hecs::World;
 use rayon::prelude::*;
 
@@ -20,17 +23,20 @@ pub fn spheres_overlap(xa: Vector, ra: Scalar, xb: Vector, rb: Scalar) -> bool {
 }
 
 /// The paper's all-pairs broad phase: every pair (a < b) whose spheres overlap, skipping
-/// pairs of two fixed actors (they never move, so never need an impulse).
+/// pairs of two fixed actors (they never move, so never need an impulse) and pairs whose
+/// widened world boxes are apart (`Bounds`).
 ///
 /// - Reads: `ctx.bodies`, the joints (`Joints`: joined pairs are skipped). Writes: `ctx.pairs` (appends
 ///   `Candidate`s, sorted), `ctx.stats`.
 /// - Paper: bounding box check; docs/physics.md §1.2, E1. Cost: O(N²).
 pub fn cull_all_pairs(_world: &mut World, ctx: &mut StepContext) {
     reach(ctx);
-    let (b, reach) = (&ctx.bodies, &ctx.scratch.get_mut::<CullScratch>().reach);
+    let s = ctx.scratch.get_mut::<CullScratch>();
+    let (b, reach, bounds) = (&ctx.bodies, &s.reach, &s.bounds);
     for i in 0..b.len() {
         for j in i + 1..b.len() {
-            if !(b.is_fixed(i) && b.is_fixed(j)) && spheres_overlap(b.position[i], reach[i], b.position[j], reach[j]) {
+            let spheres = spheres_overlap(b.position[i], reach[i], b.position[j], reach[j]);
+            if !(b.is_fixed(i) && b.is_fixed(j)) && spheres && bounds.meet(i, j) {
                 ctx.pairs.push(Pair::candidate(i as u32, j as u32));
             }
         }
@@ -49,12 +55,57 @@ fn drop_jointed(ctx: &mut StepContext) {
 
 /// Fills `CullScratch::reach`: each bounding radius widened by the body's speculative
 /// distance (`Params::speculative_distance`; zero without gravity and friction, so the paper's
-/// frictionless scenes see the paper's spheres).
+/// frictionless scenes see the paper's spheres); and `CullScratch::bounds`.
 fn reach(ctx: &mut StepContext) {
     let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
-    let reach = &mut ctx.scratch.get_mut::<CullScratch>().reach;
-    params.speculative_distances(dt, b, reach);
-    reach.iter_mut().zip(&b.radius).for_each(|(r, radius)| *r += radius);
+    let s = ctx.scratch.get_mut::<CullScratch>();
+    params.speculative_distances(dt, b, &mut s.reach);
+    s.bounds.fill(b, &ctx.meshes, params.contact_margin, &s.reach);
+    s.reach.iter_mut().zip(&b.radius).for_each(|(r, radius)| *r += radius);
+}
+
+/// Each body's world box, widened so that two boxes apart prove a pair farther apart than any
+/// margin `prune` holds it within (`prune::pair_margin`: the thinner body's contact margin plus
+/// both speculative distances, at least the proof margin): such a pair is one `prune` would drop.
+/// A box's box from its rotation; any other mesh's is its bounding sphere's, which the sphere
+/// test already covers. Resting cubes' spheres reach well past their faces, and most of the
+/// pairs they give are apart along a world axis: dropped here, they cost `prune` nothing.
+#[derive(Clone, Debug, Default)]
+pub struct Bounds {
+    /// Lower and upper corners [m].
+    pub corners: Vec<(Vector, Vector)>,
+}
+
+impl Bounds {
+    /// Body i's widening is its speculative distance, half its contact margin (two halves sum
+    /// to at least the thinner body's) and its share of the proof margin.
+    fn fill(&mut self, b: &Bodies, meshes: &MeshTable, contact_margin: Scalar, speculative: &[Scalar]) {
+        self.corners.clear();
+        self.corners.extend(speculative.iter().enumerate().map(|(i, &d)| {
+            let mesh = meshes.get(b.mesh[i]);
+            let widen = d + 0.5 * contact_margin * mesh.thickness + PRUNE_MARGIN * b.radius[i];
+            let r = b.rotation[i];
+            let half = match mesh.box_half_extents {
+                Some(h) => Vector::new(r.row(0).abs().dot(h), r.row(1).abs().dot(h), r.row(2).abs().dot(h)),
+                None => Vector::splat(b.radius[i]),
+            };
+            let half = half + Vector::splat(widen);
+            (b.position[i] - half, b.position[i] + half)
+        }));
+    }
+
+    /// The widened boxes of bodies i and j overlap (or touch).
+    #[inline]
+    fn meet(&self, i: usize, j: usize) -> bool {
+        let ((lo_i, hi_i), (lo_j, hi_j)) = (self.corners[i], self.corners[j]);
+        // Six comparisons and no branch: which pairs meet is close to random.
+        (lo_i.x <= hi_j.x)
+            & (lo_j.x <= hi_i.x)
+            & (lo_i.y <= hi_j.y)
+            & (lo_j.y <= hi_i.y)
+            & (lo_i.z <= hi_j.z)
+            & (lo_j.z <= hi_i.z)
+    }
 }
 
 /// Radii more than this many times the median go on the short "large" list tested against
@@ -101,13 +152,14 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
         } else {
             let chunks = grid_pairs(b, &reach, s);
             for chunk in &s.chunks[..chunks] {
-                ctx.pairs.extend(chunk.iter().map(|&(a, b)| Pair::candidate(a, b)));
+                let meet = chunk.iter().filter(|&&(i, j)| s.bounds.meet(i as usize, j as usize));
+                ctx.pairs.extend(meet.map(|&(a, b)| Pair::candidate(a, b)));
             }
         }
         s.reach = reach;
     }
     if s.cache.valid {
-        s.cache.filter(b, &s.reach, &mut ctx.pairs);
+        s.cache.filter(b, (&s.reach, &s.bounds), &mut ctx.pairs);
     }
     drop_jointed(ctx);
     ctx.stats.candidates = ctx.pairs.len();
@@ -307,7 +359,7 @@ impl PairCache {
     /// Appends the kept pairs that pass `cull_all_pairs`'s test today. Every kept pair is
     /// written and the count moved on past those that pass: about half of a resting rain's
     /// 12 000 pass, at random, and a branch on each, mispredicted that often, cost more.
-    fn filter(&self, b: &Bodies, reach: &[Scalar], out: &mut Vec<Pair>) {
+    fn filter(&self, b: &Bodies, (reach, bounds): (&[Scalar], &Bounds), out: &mut Vec<Pair>) {
         let start = out.len();
         out.resize(start + self.pairs.len(), Pair::candidate(0, 1));
         let mut n = start;
@@ -315,7 +367,7 @@ impl PairCache {
             let (a, c) = (i as usize, j as usize);
             out[n] = Pair::candidate(i, j);
             let overlap = spheres_overlap(b.position[a], reach[a], b.position[c], reach[c]);
-            n += usize::from(overlap & !(b.is_fixed(a) & b.is_fixed(c)));
+            n += usize::from(overlap & !(b.is_fixed(a) & b.is_fixed(c)) & bounds.meet(a, c));
         }
         out.truncate(n);
     }
@@ -477,6 +529,8 @@ pub struct CullScratch {
     /// Each body's bounding radius widened by its speculative distance [m]
     /// (`Params::speculative_distance`).
     pub reach: Vec<Scalar>,
+    /// Each body's widened world box (`Bounds`).
+    pub bounds: Bounds,
     /// Copy of the radii for the median.
     pub radii: Vec<Scalar>,
     /// Bodies too large for the grid.
@@ -560,11 +614,16 @@ mod tests {
 
     /// The default schedule over `cubes` (friction 0.5, no bounce), with gravity or without.
     fn sim_of(cubes: &[Cube], gravity: bool) -> Sim {
+        sim_with(cubes, gravity, |edge| ConvexMesh::cuboid(Vector::splat(edge)))
+    }
+
+    /// `sim_of` with each body's mesh made by `mesh` from its edge.
+    fn sim_with(cubes: &[Cube], gravity: bool, mesh: fn(Scalar) -> ConvexMesh) -> Sim {
         let gravity = if gravity { Vector::new(0.0, -9.81, 0.0) } else { Vector::ZERO };
         let params = crate::sim::context::Params { gravity, ..Default::default() };
         let mut sim = Sim::new(1.0 / 60.0, params, crate::systems::default_schedule());
         for (k, &(edge, at, fixed)) in cubes.iter().enumerate() {
-            let mesh = sim.add_mesh(ConvexMesh::cuboid(Vector::splat(edge)));
+            let mesh = sim.add_mesh(mesh(edge));
             sim.spawn(&BodyDef {
                 name: format!("cube-{k}"),
                 mesh,
@@ -578,8 +637,9 @@ mod tests {
         sim
     }
 
-    /// Cubes of bounding radius 0.5 on a 1 m lattice, touching their neighbours; the first
-    /// two fixed.
+    /// Octahedra of bounding radius 0.5 (a cube's of edge 1/√3) on a 1 m lattice, their
+    /// spheres touching their neighbours'; the first two fixed. Not cubes: those are apart
+    /// by their boxes (`Bounds`), and these tests are about the spheres.
     fn lattice(nx: usize) -> Sim {
         let cubes: Vec<Cube> = (0..nx * nx * 2)
             .map(|k| {
@@ -587,7 +647,10 @@ mod tests {
                 (1.0 / 3f64.sqrt(), Vector::new(x as Scalar, y as Scalar, z as Scalar), k < 2)
             })
             .collect();
-        sim_of(&cubes, false)
+        sim_with(&cubes, false, |_| {
+            let (v, t) = crate::model::shapes::octahedron_raw(0.5);
+            ConvexMesh::new(v, t).expect("valid").0
+        })
     }
 
     /// A ground slab (a fixed 40 m cube whose top is at y = 0) and `cubes` above it.
@@ -721,6 +784,44 @@ mod tests {
         }
         for w in [Way::Plain, Way::Rebuilt, Way::Reanchored, Way::Kept] {
             assert!(ways.contains(&w), "{w:?} in {ways:?}");
+        }
+    }
+
+    #[test]
+    fn cubes_apart_by_their_world_boxes_are_no_pair_until_one_turns() {
+        // Unit cubes 1.2 m apart along x and y: their centres 1.70 m apart, under the spheres'
+        // 1.73, their boxes 0.2 m apart, ten times the widening (no gravity, no speed: only the
+        // contact margin).
+        let mut sim = sim_of(&[(1.0, Vector::ZERO, false), (1.0, Vector::new(1.2, 1.2, 0.0), false)], false);
+        let r = 3f64.sqrt() / 2.0;
+        assert!(spheres_overlap(Vector::ZERO, r, Vector::new(1.2, 1.2, 0.0), r));
+        assert_eq!(check(&mut sim, |_| {}).1, []);
+        // An eighth of a turn about z, the second reaches √½ m along x and y: the boxes meet.
+        let q = crate::math::Quat::from_rotation_z(std::f64::consts::FRAC_PI_4);
+        let turned = |b: &mut Bodies| (b.orientation[1], b.rotation[1]) = (q, crate::math::Mat3::from_quat(q));
+        assert_eq!(check(&mut sim, turned).1, [(0, 1)]);
+    }
+
+    #[test]
+    fn world_boxes_hold_a_turned_box_tightly_widened_by_its_margins() {
+        let mut sim = sim_with(&[(0.5, Vector::new(1.0, -2.0, 3.0), false)], false, |e| {
+            ConvexMesh::cuboid(Vector::new(e, 2.0 * e, 3.0 * e))
+        });
+        let mut rng = SplitMix64::new(11);
+        sim.ctx.begin_step(&sim.world);
+        for _ in 0..50 {
+            let axis = Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+            let q = crate::math::Quat::from_axis_angle(axis.normalize(), rng.uniform(-3.0, 3.0));
+            let b = &mut sim.ctx.bodies;
+            (b.orientation[0], b.rotation[0]) = (q, crate::math::Mat3::from_quat(q));
+            reach(&mut sim.ctx);
+            let (b, mesh) = (&sim.ctx.bodies, sim.ctx.meshes.get(sim.ctx.bodies.mesh[0]));
+            let widen = 0.5 * sim.ctx.params.contact_margin * mesh.thickness + PRUNE_MARGIN * b.radius[0];
+            let (lo, hi) = sim.ctx.scratch.get_mut::<CullScratch>().bounds.corners[0];
+            let corners = mesh.vertices.iter().map(|&v| b.position[0] + b.rotation[0] * v);
+            let (low, high) = corners.fold((Vector::INFINITY, Vector::NEG_INFINITY), |(l, h), x| (l.min(x), h.max(x)));
+            assert!((low - (lo + Vector::splat(widen))).abs().max_element() < 1e-14, "{low} {lo}");
+            assert!((high - (hi - Vector::splat(widen))).abs().max_element() < 1e-14, "{high} {hi}");
         }
     }
 
