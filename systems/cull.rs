@@ -123,6 +123,8 @@ const MAX_DIM: Scalar = (1u64 << 32) as Scalar;
 /// make four (its cull went from 0.33 to 0.23 ms on two threads), the chunks' pairs joined
 /// in order, so the list is the same for any count.
 const CHUNK: usize = 256;
+/// Fewest kept pairs a thread filters: fewer are not worth a thread's start.
+const FILTER_CHUNK: usize = 1024;
 
 /// Uniform-grid broad phase, the default: the same pairs, in the same order, as
 /// `cull_all_pairs`. While bodies barely move it filters a kept list instead of rebuilding
@@ -159,7 +161,7 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
         s.reach = reach;
     }
     if s.cache.valid {
-        s.cache.filter(b, (&s.reach, &s.bounds), &mut ctx.pairs);
+        s.cache.filter(b, (&s.reach, &s.bounds), &mut s.chunks, &mut ctx.pairs);
     }
     drop_jointed(ctx);
     ctx.stats.candidates = ctx.pairs.len();
@@ -358,18 +360,35 @@ impl PairCache {
 
     /// Appends the kept pairs that pass `cull_all_pairs`'s test today. Every kept pair is
     /// written and the count moved on past those that pass: about half of a resting rain's
-    /// 12 000 pass, at random, and a branch on each, mispredicted that often, cost more.
-    fn filter(&self, b: &Bodies, (reach, bounds): (&[Scalar], &Bounds), out: &mut Vec<Pair>) {
-        let start = out.len();
-        out.resize(start + self.pairs.len(), Pair::candidate(0, 1));
-        let mut n = start;
-        for &(i, j) in &self.pairs {
-            let (a, c) = (i as usize, j as usize);
-            out[n] = Pair::candidate(i, j);
-            let overlap = spheres_overlap(b.position[a], reach[a], b.position[c], reach[c]);
-            n += usize::from(overlap & !(b.is_fixed(a) & b.is_fixed(c)) & bounds.meet(a, c));
+    /// 12 000 pass, at random, and a branch on each, mispredicted that often, cost more. A part
+    /// of the list per thread, into `chunks`, joined in order: the same list on any count.
+    fn filter(
+        &self,
+        b: &Bodies,
+        (reach, bounds): (&[Scalar], &Bounds),
+        chunks: &mut Vec<Vec<(u32, u32)>>,
+        out: &mut Vec<Pair>,
+    ) {
+        let size = self.pairs.len().div_ceil(rayon::current_num_threads()).max(FILTER_CHUNK);
+        let count = self.pairs.len().div_ceil(size);
+        if chunks.len() < count {
+            chunks.resize_with(count, Vec::new);
         }
-        out.truncate(n);
+        self.pairs.par_chunks(size).zip(chunks[..count].par_iter_mut()).for_each(|(pairs, kept)| {
+            kept.clear();
+            kept.resize(pairs.len(), (0, 0));
+            let mut n = 0;
+            for &(i, j) in pairs {
+                let (a, c) = (i as usize, j as usize);
+                kept[n] = (i, j);
+                let overlap = spheres_overlap(b.position[a], reach[a], b.position[c], reach[c]);
+                n += usize::from(overlap & !(b.is_fixed(a) & b.is_fixed(c)) & bounds.meet(a, c));
+            }
+            kept.truncate(n);
+        });
+        for kept in &chunks[..count] {
+            out.extend(kept.iter().map(|&(i, j)| Pair::candidate(i, j)));
+        }
     }
 }
 

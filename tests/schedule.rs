@@ -85,13 +85,14 @@ fn unknown_and_duplicate_names_are_clear_errors() {
 
 #[test]
 fn a_user_system_runs_in_its_place_and_can_change_the_outcome() {
-    // The face-collision scene: one candidate pair from step 1 (spheres overlap, boxes do not).
+    // The face-collision scene: its cubes' spheres overlap from step 1, their boxes do not.
     let mut sim = sim_of("face-collision.ron", |_| {});
     sim.schedule.insert_before("face", System { name: "census", run: census }).expect("face exists");
     sim.step().expect("finite");
-    // One sphere candidate from `cull`; the cubes are 0.0975 m apart, so `prune` dropped it.
-    assert_eq!(sim.ctx.stats.candidates, 1);
-    assert_eq!(CENSUS.load(std::sync::atomic::Ordering::SeqCst), 1000, "census ran once, after prune");
+    // The cubes are 0.0975 m apart, past the contact margin: `cull` dropped the pair by their
+    // boxes, so no system after it saw a pair.
+    assert_eq!(sim.ctx.stats.candidates, 0);
+    assert_eq!(CENSUS.load(std::sync::atomic::Ordering::SeqCst), 1000, "census ran once, saw no pair");
     // Freezing at the start of every step stops the cubes: no impulse ever happens.
     let mut sim = sim_of("face-collision.ron", |_| {});
     sim.schedule.insert_before("cull", System { name: "freeze", run: freeze }).expect("cull exists");
