@@ -161,7 +161,7 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
         s.reach = reach;
     }
     if s.cache.valid {
-        s.cache.filter(b, (&s.reach, &s.bounds), &mut s.chunks, &mut ctx.pairs);
+        s.cache.filter(b, (&s.reach, &s.bounds), &mut s.passed, &mut ctx.pairs);
     }
     drop_jointed(ctx);
     ctx.stats.candidates = ctx.pairs.len();
@@ -366,28 +366,30 @@ impl PairCache {
         &self,
         b: &Bodies,
         (reach, bounds): (&[Scalar], &Bounds),
-        chunks: &mut Vec<Vec<(u32, u32)>>,
+        passed: &mut Vec<(usize, Vec<(u32, u32)>)>,
         out: &mut Vec<Pair>,
     ) {
         let size = self.pairs.len().div_ceil(rayon::current_num_threads()).max(FILTER_CHUNK);
         let count = self.pairs.len().div_ceil(size);
-        if chunks.len() < count {
-            chunks.resize_with(count, Vec::new);
+        if passed.len() < count {
+            passed.resize_with(count, Default::default);
         }
-        self.pairs.par_chunks(size).zip(chunks[..count].par_iter_mut()).for_each(|(pairs, kept)| {
-            kept.clear();
-            kept.resize(pairs.len(), (0, 0));
-            let mut n = 0;
+        // Each part's buffer keeps its length from step to step (no clearing, no zeroing);
+        // the count says how much of it passed.
+        self.pairs.par_chunks(size).zip(passed[..count].par_iter_mut()).for_each(|(pairs, (n, kept))| {
+            if kept.len() < pairs.len() {
+                kept.resize(pairs.len(), (0, 0));
+            }
+            *n = 0;
             for &(i, j) in pairs {
                 let (a, c) = (i as usize, j as usize);
-                kept[n] = (i, j);
+                kept[*n] = (i, j);
                 let overlap = spheres_overlap(b.position[a], reach[a], b.position[c], reach[c]);
-                n += usize::from(overlap & !(b.is_fixed(a) & b.is_fixed(c)) & bounds.meet(a, c));
+                *n += usize::from(overlap & !(b.is_fixed(a) & b.is_fixed(c)) & bounds.meet(a, c));
             }
-            kept.truncate(n);
         });
-        for kept in &chunks[..count] {
-            out.extend(kept.iter().map(|&(i, j)| Pair::candidate(i, j)));
+        for (n, kept) in &passed[..count] {
+            out.extend(kept[..*n].iter().map(|&(i, j)| Pair::candidate(i, j)));
         }
     }
 }
@@ -568,6 +570,8 @@ pub struct CullScratch {
     pub chunks: Vec<Vec<(u32, u32)>>,
     /// The pairs kept from step to step while bodies barely move.
     pub cache: PairCache,
+    /// The kept list's filter: each thread's part, its count of passing pairs first.
+    pub passed: Vec<(usize, Vec<(u32, u32)>)>,
 }
 
 #[cfg(test)]
