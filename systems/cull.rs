@@ -72,16 +72,32 @@ fn reach(ctx: &mut StepContext) {
 /// pairs they give are apart along a world axis: dropped here, they cost `prune` nothing.
 #[derive(Clone, Debug, Default)]
 pub struct Bounds {
-    /// Lower and upper corners [m].
-    pub corners: Vec<(Vector, Vector)>,
+    /// Each body's, by actor index.
+    pub rows: Vec<BodyBounds>,
+}
+
+/// What the candidate test reads of one body, side by side: a kept list's filter reads two
+/// rows a pair.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BodyBounds {
+    /// Centre of mass [m].
+    pub centre: Vector,
+    /// Bounding radius widened by the speculative distance (`CullScratch::reach`) [m].
+    pub reach: Scalar,
+    /// Lower corner of the widened world box [m].
+    pub lo: Vector,
+    /// Upper corner of the widened world box [m].
+    pub hi: Vector,
+    /// Fixed (or asleep).
+    pub fixed: bool,
 }
 
 impl Bounds {
     /// Body i's widening is its speculative distance, half its contact margin (two halves sum
     /// to at least the thinner body's) and its share of the proof margin.
     fn fill(&mut self, b: &Bodies, meshes: &MeshTable, contact_margin: Scalar, speculative: &[Scalar]) {
-        self.corners.clear();
-        self.corners.extend(speculative.iter().enumerate().map(|(i, &d)| {
+        self.rows.clear();
+        self.rows.extend(speculative.iter().enumerate().map(|(i, &d)| {
             let mesh = meshes.get(b.mesh[i]);
             let widen = d + 0.5 * contact_margin * mesh.thickness + PRUNE_MARGIN * b.radius[i];
             let r = b.rotation[i];
@@ -89,15 +105,31 @@ impl Bounds {
                 Some(h) => Vector::new(r.row(0).abs().dot(h), r.row(1).abs().dot(h), r.row(2).abs().dot(h)),
                 None => Vector::splat(b.radius[i]),
             };
-            let half = half + Vector::splat(widen);
-            (b.position[i] - half, b.position[i] + half)
+            let (centre, half) = (b.position[i], half + Vector::splat(widen));
+            BodyBounds { centre, reach: d + b.radius[i], lo: centre - half, hi: centre + half, fixed: b.is_fixed(i) }
         }));
     }
 
     /// The widened boxes of bodies i and j overlap (or touch).
     #[inline]
     fn meet(&self, i: usize, j: usize) -> bool {
-        let ((lo_i, hi_i), (lo_j, hi_j)) = (self.corners[i], self.corners[j]);
+        self.rows[i].meets(&self.rows[j])
+    }
+}
+
+impl BodyBounds {
+    /// `cull_all_pairs`'s test of the pair of these two bodies.
+    #[inline]
+    fn candidates(&self, other: &Self) -> bool {
+        spheres_overlap(self.centre, self.reach, other.centre, other.reach)
+            & !(self.fixed & other.fixed)
+            & self.meets(other)
+    }
+
+    /// The widened boxes overlap (or touch).
+    #[inline]
+    fn meets(&self, other: &Self) -> bool {
+        let ((lo_i, hi_i), (lo_j, hi_j)) = ((self.lo, self.hi), (other.lo, other.hi));
         // Six comparisons and no branch: which pairs meet is close to random.
         (lo_i.x <= hi_j.x)
             & (lo_j.x <= hi_i.x)
@@ -161,7 +193,7 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
         s.reach = reach;
     }
     if s.cache.valid {
-        s.cache.filter(b, (&s.reach, &s.bounds), &mut s.passed, &mut ctx.pairs);
+        s.cache.filter(&s.bounds, &mut s.passed, &mut ctx.pairs);
     }
     drop_jointed(ctx);
     ctx.stats.candidates = ctx.pairs.len();
@@ -362,18 +394,13 @@ impl PairCache {
     /// written and the count moved on past those that pass: about half of a resting rain's
     /// 12 000 pass, at random, and a branch on each, mispredicted that often, cost more. A part
     /// of the list per thread, into `chunks`, joined in order: the same list on any count.
-    fn filter(
-        &self,
-        b: &Bodies,
-        (reach, bounds): (&[Scalar], &Bounds),
-        passed: &mut Vec<(usize, Vec<(u32, u32)>)>,
-        out: &mut Vec<Pair>,
-    ) {
+    fn filter(&self, bounds: &Bounds, passed: &mut Vec<(usize, Vec<(u32, u32)>)>, out: &mut Vec<Pair>) {
         let size = self.pairs.len().div_ceil(rayon::current_num_threads()).max(FILTER_CHUNK);
         let count = self.pairs.len().div_ceil(size);
         if passed.len() < count {
             passed.resize_with(count, Default::default);
         }
+        let rows = &bounds.rows[..];
         // Each part's buffer keeps its length from step to step (no clearing, no zeroing);
         // the count says how much of it passed.
         self.pairs.par_chunks(size).zip(passed[..count].par_iter_mut()).for_each(|(pairs, (n, kept))| {
@@ -382,10 +409,8 @@ impl PairCache {
             }
             *n = 0;
             for &(i, j) in pairs {
-                let (a, c) = (i as usize, j as usize);
                 kept[*n] = (i, j);
-                let overlap = spheres_overlap(b.position[a], reach[a], b.position[c], reach[c]);
-                *n += usize::from(overlap & !(b.is_fixed(a) & b.is_fixed(c)) & bounds.meet(a, c));
+                *n += usize::from(rows[i as usize].candidates(&rows[j as usize]));
             }
         });
         for (n, kept) in &passed[..count] {
@@ -840,7 +865,8 @@ mod tests {
             reach(&mut sim.ctx);
             let (b, mesh) = (&sim.ctx.bodies, sim.ctx.meshes.get(sim.ctx.bodies.mesh[0]));
             let widen = 0.5 * sim.ctx.params.contact_margin * mesh.thickness + PRUNE_MARGIN * b.radius[0];
-            let (lo, hi) = sim.ctx.scratch.get_mut::<CullScratch>().bounds.corners[0];
+            let row = sim.ctx.scratch.get_mut::<CullScratch>().bounds.rows[0];
+            let (lo, hi) = (row.lo, row.hi);
             let corners = mesh.vertices.iter().map(|&v| b.position[0] + b.rotation[0] * v);
             let (low, high) = corners.fold((Vector::INFINITY, Vector::NEG_INFINITY), |(l, h), x| (l.min(x), h.max(x)));
             assert!((low - (lo + Vector::splat(widen))).abs().max_element() < 1e-14, "{low} {lo}");
