@@ -393,7 +393,7 @@ impl PairCache {
     /// Appends the kept pairs that pass `cull_all_pairs`'s test today. Every kept pair is
     /// written and the count moved on past those that pass: about half of a resting rain's
     /// 12 000 pass, at random, and a branch on each, mispredicted that often, cost more. A part
-    /// of the list per thread, into `chunks`, joined in order: the same list on any count.
+    /// of the list per thread, into `passed`, joined in order: the same list on any count.
     fn filter(&self, bounds: &Bounds, passed: &mut Vec<(usize, Vec<(u32, u32)>)>, out: &mut Vec<Pair>) {
         let size = self.pairs.len().div_ceil(rayon::current_num_threads()).max(FILTER_CHUNK);
         let count = self.pairs.len().div_ceil(size);
