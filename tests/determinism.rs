@@ -5,9 +5,13 @@ mod common;
 use common::*;
 use rigid_sandbox::io::output::state_hash;
 
+/// `f` run in a pool of `threads` threads.
+fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool").install(f)
+}
+
 fn hash_with_threads(threads: usize, steps: u64) -> u64 {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-    pool.install(|| {
+    on_threads(threads, || {
         let mut sim = rigid_sandbox::scene::benchmarks::box_gas_sim(512, 1);
         sim.run(steps).expect("finite");
         state_hash(&sim.actors())
@@ -26,8 +30,7 @@ fn box_gas_is_bit_identical_across_runs_and_thread_counts() {
 #[test]
 fn mixed_shapes_are_bit_identical_across_thread_counts() {
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-        pool.install(|| {
+        on_threads(threads, || {
             let mut sim = sim_of("spawners.ron", |_| {});
             sim.run(200).expect("finite");
             state_hash(&sim.actors())
@@ -48,8 +51,7 @@ fn box_gas_hash_is_pinned() {
 /// The 20-row pyramid (590 constraints, enough for `solve` to split them in two sides and
 /// solve both at once) after `steps` steps in a pool of `threads`, handed to `look`.
 fn pyramid_on<T: Send>(threads: usize, steps: u64, look: impl FnOnce(&rigid_sandbox::sim::Sim) -> T + Send) -> T {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-    pool.install(|| {
+    on_threads(threads, || {
         let mut sim =
             rigid_sandbox::scene::benchmarks::scene_sim(rigid_sandbox::scene::benchmarks::BenchScene::Pyramid, 20, 1);
         sim.run(steps).expect("finite");
@@ -116,8 +118,7 @@ fn a_split_pile_with_joints_is_bit_identical_on_one_thread_or_two() {
         ],
     )"#;
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-        pool.install(|| {
+        on_threads(threads, || {
             let mut sim = sim_from_text(SCENE);
             sim.run(30).expect("finite");
             assert!(sim.ctx.stats.split && sim.ctx.stats.held > 256, "held {}", sim.ctx.stats.held);
@@ -138,8 +139,7 @@ fn pyramids_stepped_side_by_side_in_one_pool_match_each_alone() {
         sim.run(15).expect("finite");
         state_hash(&sim.actors())
     };
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("pool");
-    let hashes: Vec<u64> = pool.install(|| {
+    let hashes: Vec<u64> = on_threads(2, || {
         use rayon::prelude::*;
         (0..4)
             .into_par_iter()
