@@ -31,12 +31,10 @@ pub fn spheres_overlap(xa: Vector, ra: Scalar, xb: Vector, rb: Scalar) -> bool {
 /// - Paper: bounding box check; docs/physics.md §1.2, E1. Cost: O(N²).
 pub fn cull_all_pairs(_world: &mut World, ctx: &mut StepContext) {
     reach(ctx);
-    let s = ctx.scratch.get_mut::<CullScratch>();
-    let (b, reach, bounds) = (&ctx.bodies, &s.reach, &s.bounds);
-    for i in 0..b.len() {
-        for j in i + 1..b.len() {
-            let spheres = spheres_overlap(b.position[i], reach[i], b.position[j], reach[j]);
-            if !(b.is_fixed(i) && b.is_fixed(j)) && spheres && bounds.meet(i, j) {
+    let rows = &ctx.scratch.get_mut::<CullScratch>().bounds.rows;
+    for i in 0..rows.len() {
+        for j in i + 1..rows.len() {
+            if rows[i].candidates(&rows[j]) {
                 ctx.pairs.push(Pair::candidate(i as u32, j as u32));
             }
         }
@@ -118,7 +116,8 @@ impl Bounds {
 }
 
 impl BodyBounds {
-    /// `cull_all_pairs`'s test of the pair of these two bodies.
+    /// The candidate test of a pair of these two bodies: spheres overlap, not both fixed, boxes
+    /// meet (`cull_all_pairs`, the kept list's filter; the plain grid has tested the first two).
     #[inline]
     fn candidates(&self, other: &Self) -> bool {
         spheres_overlap(self.centre, self.reach, other.centre, other.reach)
