@@ -35,10 +35,10 @@ use hecs::World;
 use rayon::prelude::*;
 
 /// Relative motion [fraction of the thinner body] since a pair's contact points were found
-/// below which it keeps them: rapier recycles below 5 cm; a fifth of that (1 cm for a 1 m cube)
-/// still keeps a sliding or tipping body's points fresh, while a pile creeping by millimetres
-/// keeps its points (BENCH.md).
-const RECYCLE_DISTANCE: Scalar = 0.01;
+/// below which it keeps them: 3 cm for a 1 m cube. A held point is then at most half that off
+/// the one clipping would find, while a pile that creeps and tumbles as it settles keeps its
+/// points (BENCH.md, session 22: 1 % found a rain's pairs afresh every few steps).
+const RECYCLE_DISTANCE: Scalar = 0.03;
 
 /// Holds resting contacts, applies friction and bounces impacts (see the module docs).
 ///
