@@ -35,9 +35,9 @@ use hecs::World;
 use rayon::prelude::*;
 
 /// Relative motion [fraction of the thinner body] since a pair's contact points were found
-/// below which it keeps them: 3 cm for a 1 m cube. A held point is then at most half that off
-/// the one clipping would find, while a pile that creeps and tumbles as it settles keeps its
-/// points (BENCH.md, session 22: 1 % found a rain's pairs afresh every few steps).
+/// below which it keeps them: 3 cm for a 1 m cube. Each held point's end on B has then moved
+/// less than that against its end on A, and a settling pile, which creeps and tumbles by
+/// centimetres, keeps its points instead of finding them afresh every few steps (BENCH.md).
 const RECYCLE_DISTANCE: Scalar = 0.03;
 
 /// Holds resting contacts, applies friction and bounces impacts (see the module docs).
