@@ -43,7 +43,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     // then both go in the first group, numbered across both sides as the constraints across
     // are. The sides share no free body, so each constraint meets its bodies in the same order
     // and does the same arithmetic (the same bits), and the batches, which one side's chains
-    // of contacts leave a quarter empty, fill up with the other side's constraints.
+    // of contacts leave partly empty, fill up with the other side's constraints.
     s.merged = s.left < s.moving.len() && rayon::current_num_threads() == 1;
     s.split = false;
     let (left, last) = (s.left as u32, s.bodies.len() as u32 - 1);
