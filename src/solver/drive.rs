@@ -73,6 +73,13 @@ fn run<B: BodyStore + ?Sized>(pass: Pass, bodies: &mut B, group: &mut Constraint
     }
 }
 
+/// Applies the body steps `steps` in order to the free bodies of one side (`apply`).
+fn apply_all(steps: &[Step], side: &mut [SolverBody], kept: &mut [[Vector; 2]]) {
+    for &step in steps {
+        apply(step, side, kept);
+    }
+}
+
 /// Applies a body step to the free bodies of one side (its last slot is static), with their
 /// kept velocities `kept` (`Step::Keep`).
 fn apply(step: Step, side: &mut [SolverBody], kept: &mut [[Vector; 2]]) {
@@ -110,28 +117,40 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
     let threaded = !second.batches.is_empty() && rayon::current_num_threads() > 1;
     // The gaps change only with a move: the first sweep after one works them out for the rest.
     let mut moved = true;
-    for &step in plan {
+    // The body steps since the last pass (`plan[since..at]`), applied just before the next
+    // one: with two threads each side's by the thread that runs its pass.
+    let mut since = 0;
+    for (at, &step) in plan.iter().enumerate() {
         let Step::Pass(pass) = step else {
-            let (left, right) = bodies.split_at_mut(*cut + 1);
-            apply(step, left, kept_left);
-            apply(step, right, kept_right);
             joints.stale |= matches!(step, Step::Move(_));
             moved |= matches!(step, Step::Move(_));
             continue;
         };
+        let steps = &plan[since..at];
+        since = at + 1;
         let fresh = moved && matches!(pass, Pass::Solve(_) | Pass::Relax);
         moved &= !fresh;
+        let (left, right) = bodies.split_at_mut(*cut + 1);
         if *merged {
+            apply_all(steps, left, kept_left);
+            apply_all(steps, right, kept_right);
             // Both sides' constraints in one group, numbered across both (`build_constraints`).
             run(pass, &mut bodies[..], first, h, fresh);
             run(pass, &mut bodies[..], across, h, fresh);
         } else {
-            let (left, right) = bodies.split_at_mut(*cut + 1);
-            if threaded {
-                rayon::join(|| run(pass, left, first, h, fresh), || run(pass, right, second, h, fresh));
-            } else {
+            let mut left_side = || {
+                apply_all(steps, left, kept_left);
                 run(pass, left, first, h, fresh);
+            };
+            let mut right_side = || {
+                apply_all(steps, right, kept_right);
                 run(pass, right, second, h, fresh);
+            };
+            if threaded {
+                rayon::join(left_side, right_side);
+            } else {
+                left_side();
+                right_side();
             }
             if !across.batches.is_empty() {
                 run(pass, &mut Sides { left: &mut *left, right: &mut *right }, across, h, fresh);
@@ -148,5 +167,8 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
             joint_pass(&mut Sides { left, right }, joints, joint, h);
         }
     }
+    let (left, right) = bodies.split_at_mut(*cut + 1);
+    apply_all(&plan[since..], left, kept_left);
+    apply_all(&plan[since..], right, kept_right);
     store_impulses(joints);
 }
