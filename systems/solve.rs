@@ -362,16 +362,22 @@ fn remember(ctx: &mut StepContext) {
             out.normal[j] = group.points[batch.first as usize + j].impulse[lane];
         }
         *key = (pairs[k].a, pairs[k].b);
+        // Counted if it pushed.
+        out.found.filter(|_| out.normal.iter().any(|&j| j > 0.0))
     };
-    s.next_cache.resize(s.by_pair.len(), ((0, 0), CachedManifold::default()));
-    s.next_cache.par_iter_mut().zip(s.by_pair.par_iter()).for_each(entry);
-    std::mem::swap(&mut s.cache, &mut s.next_cache);
-    for (&h, (_, entry)) in s.by_pair.iter().zip(&s.cache) {
-        let k = s.held[h as usize].pair as usize;
-        let pushed = entry.normal.iter().any(|&j| j > 0.0);
-        if let (Some(contact), false, true) = (s.pairs[k].contact(), s.near[k], pushed) {
-            ctx.stats.impulses[contact.feature as usize] += 1;
+    let count = |mut counts: [u64; 3], found: Option<Feature>| {
+        if let Some(feature) = found {
+            counts[feature as usize] += 1;
         }
+        counts
+    };
+    let add = |a: [u64; 3], b: [u64; 3]| [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+    s.next_cache.resize(s.by_pair.len(), ((0, 0), CachedManifold::default()));
+    let rows = s.next_cache.par_iter_mut().zip(s.by_pair.par_iter());
+    let impulses = rows.map(entry).fold(|| [0; 3], count).reduce(|| [0; 3], add);
+    std::mem::swap(&mut s.cache, &mut s.next_cache);
+    for (total, n) in ctx.stats.impulses.iter_mut().zip(impulses) {
+        *total += n;
     }
 }
 
