@@ -32,12 +32,16 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     // pass. The order matters: top-down sweeps let a tall pyramid wobble. Ties keep pair order.
     let up = -params.gravity.normalize_or_zero();
     s.order.clear();
-    let held = s.manifolds.iter().enumerate().filter(|&(k, m)| m.len > 0 && s.pairs[k].contact().is_some());
+    let held = s.manifolds.iter().zip(&s.pairs).enumerate().filter(|(_, (m, p))| is_held(m, p));
     let height = |m: &Manifold| m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar;
     // Sorted by integer keys (`total_order_key`), cheaper to compare than floats.
-    s.order.extend(held.map(|(k, m)| (total_order_key(height(m)), k as u32)));
-    sort_from_last_order(s);
-    gather_bodies(b, s);
+    s.order.extend(held.map(|(k, (m, _))| (total_order_key(height(m)), k as u32)));
+    // The sort and the solver bodies at once (the bodies do not depend on the order).
+    let SolveScratch { order, by_pair, cached, cache, ranked, unranked, .. } = s;
+    let last = Ranks { by_pair, cached, entries: cache.len() };
+    let SolveScratch { pairs, manifolds, jointed, slot, moving, keys, left, scale, bodies, .. } = s;
+    let parts = BodyParts { pairs, manifolds, jointed, slot, moving, keys, left, scale, bodies };
+    rayon::join(|| sort_from_last_order(order, &last, ranked, unranked), || gather_bodies(b, parts));
     // Each constraint's group: within the first side, within the second, or across; then its
     // batches, each group placed on its own. One thread solves the sides one after the other:
     // then both go in the first group, numbered across both sides as the constraints across
@@ -113,14 +117,35 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     }
 }
 
-/// Sorts `s.order` starting from last step's solving order: the pairs held then in the order
-/// they were solved (`s.by_pair`, each cache entry's place in it, left by `solve::remember`)
+/// Whether a pair with manifold `m` is held (a constraint of this step).
+fn is_held(m: &Manifold, pair: &Pair) -> bool {
+    m.len > 0 && pair.contact().is_some()
+}
+
+/// Last step's solving order, as `sort_from_last_order` reads it.
+struct Ranks<'a> {
+    /// Each cache entry's place in last step's order (`SolveScratch::by_pair`).
+    by_pair: &'a [u32],
+    /// Each pair's cache entry (`SolveScratch::cached`).
+    cached: &'a [u32],
+    /// The number of cache entries.
+    entries: usize,
+}
+
+/// Sorts `order` starting from last step's solving order: the pairs held then in the order
+/// they were solved (`by_pair`, each cache entry's place in it, left by `solve::remember`)
 /// finished by an insertion sort (past a budget of moves, sorted afresh), the others sorted on
 /// their own and merged in. A resting pile keeps most of its order, so this does less work than
 /// sorting afresh; the keys are distinct (pair indices break ties), so the result is the same.
-fn sort_from_last_order(s: &mut SolveScratch) {
-    let SolveScratch { order, by_pair, cached, cache, ranked, keys, .. } = s;
-    if by_pair.len() != cache.len() || order.len() < 2 {
+/// `ranked` and `keys` are scratch.
+fn sort_from_last_order(
+    order: &mut Vec<(u64, u32)>,
+    last: &Ranks,
+    ranked: &mut Vec<(u64, u32)>,
+    keys: &mut Vec<(u64, u32)>,
+) {
+    let Ranks { by_pair, cached, entries } = *last;
+    if by_pair.len() != entries || order.len() < 2 {
         order.sort_unstable();
         return;
     }
@@ -321,6 +346,20 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     }
 }
 
+/// What `gather_bodies` reads (the pairs, their manifolds, the jointed actors) and writes of
+/// `SolveScratch`, its fields of the same names.
+struct BodyParts<'a> {
+    pairs: &'a [Pair],
+    manifolds: &'a [Manifold],
+    jointed: &'a [u32],
+    slot: &'a mut Vec<u32>,
+    moving: &'a mut Vec<u32>,
+    keys: &'a mut Vec<(u64, u32)>,
+    left: &'a mut usize,
+    scale: &'a mut Vec<Mat3>,
+    bodies: &'a mut Vec<SolverBody>,
+}
+
 /// Constraints below this many are solved as one group: splitting costs more than it saves.
 const SPLIT_MIN: usize = 256;
 
@@ -332,54 +371,59 @@ const SPLIT_MIN: usize = 256;
 /// bodies are the first side's, its static slot, the second side's, and the last static slot.
 /// Every fixed body maps to a static slot. The split depends on the scene only, never on the
 /// thread count, so runs are the same on one thread or two.
-fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
-    for &i in &s.moving {
-        s.slot[i as usize] = u32::MAX;
+fn gather_bodies(b: &Bodies, parts: BodyParts) {
+    let BodyParts { pairs, manifolds, jointed, slot, moving, keys, left, scale, bodies } = parts;
+    for &i in moving.iter() {
+        slot[i as usize] = u32::MAX;
     }
-    s.slot.resize(b.len(), u32::MAX);
-    s.moving.clear();
-    // Each free end once, marked in `slot` (a body fixed last step, asleep say, may still
-    // hold the static slot there, so the mark is a value no slot takes). Their numbering
-    // changes no result (it only tells bodies apart), so it is the order they come in.
+    slot.resize(b.len(), u32::MAX);
+    moving.clear();
+    // Each free end of the held pairs once, marked in `slot` (a body fixed last step, asleep
+    // say, may still hold the static slot there, so the mark is a value no slot takes). Their
+    // numbering changes no result (constraints are placed and solved by which bodies they
+    // share, never by their numbers), so it is the order they come in, pair order, and the
+    // solving order is sorted meanwhile.
     const MARKED: u32 = u32::MAX - 1;
     // The joints' bodies after the contacts' (none in a scene without joints).
-    let ends = s.order.iter().flat_map(|&(_, k)| [s.pairs[k as usize].a, s.pairs[k as usize].b]);
-    for i in ends.chain(s.jointed.iter().copied()) {
-        if !b.is_fixed(i as usize) && s.slot[i as usize] != MARKED {
-            s.slot[i as usize] = MARKED;
-            s.moving.push(i);
+    let held = pairs.iter().zip(manifolds).filter(|(p, m)| is_held(m, p));
+    let mut constraints = 0;
+    let ends = held.inspect(|_| constraints += 1).flat_map(|(p, _)| [p.a, p.b]);
+    for i in ends.chain(jointed.iter().copied()) {
+        if !b.is_fixed(i as usize) && slot[i as usize] != MARKED {
+            slot[i as usize] = MARKED;
+            moving.push(i);
         }
     }
-    s.left = s.moving.len();
-    if s.order.len() >= SPLIT_MIN {
+    *left = moving.len();
+    if constraints >= SPLIT_MIN {
         // The horizontal axis (across gravity) along which the bodies spread widest.
         let spread = |axis: Vector| {
-            let along = s.moving.iter().map(|&i| b.position[i as usize].dot(axis));
+            let along = moving.iter().map(|&i| b.position[i as usize].dot(axis));
             let (lo, hi) = along.fold((Scalar::INFINITY, Scalar::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
             hi - lo
         };
         let axis = if spread(Vector::X) >= spread(Vector::Z) { Vector::X } else { Vector::Z };
-        s.keys.clear();
-        s.keys.extend(s.moving.iter().map(|&i| (total_order_key(b.position[i as usize].dot(axis)), i)));
+        keys.clear();
+        keys.extend(moving.iter().map(|&i| (total_order_key(b.position[i as usize].dot(axis)), i)));
         // Only which side each body is on matters (a side's numbering changes no result), so
         // a partition at the median will do, with no sort.
-        s.left = s.moving.len() / 2;
-        s.keys.select_nth_unstable(s.left);
-        s.moving.clear();
-        s.moving.extend(s.keys.iter().map(|k| k.1));
+        *left = moving.len() / 2;
+        keys.select_nth_unstable(*left);
+        moving.clear();
+        moving.extend(keys.iter().map(|k| k.1));
     }
-    let (left, last) = (s.left as u32, s.moving.len() as u32 + 1);
-    for (k, &i) in s.moving.iter().enumerate() {
-        s.slot[i as usize] = if (k as u32) < left { k as u32 } else { k as u32 + 1 };
+    let (cut, last) = (*left as u32, moving.len() as u32 + 1);
+    for (k, &i) in moving.iter().enumerate() {
+        slot[i as usize] = if (k as u32) < cut { k as u32 } else { k as u32 + 1 };
     }
-    for i in s.pairs.iter().flat_map(|p| [p.a, p.b]).chain(s.jointed.iter().copied()) {
+    for i in pairs.iter().flat_map(|p| [p.a, p.b]).chain(jointed.iter().copied()) {
         if b.is_fixed(i as usize) {
-            s.slot[i as usize] = last;
+            slot[i as usize] = last;
         }
     }
     // S and S⁻¹; for equal principal moments (cubes, spheres) multiples of the identity,
     // whatever the orientation.
-    let scale = |i: usize| {
+    let scales = |i: usize| {
         let m = b.principal_moments[i];
         if m.x == m.y && m.y == m.z {
             return (
@@ -391,18 +435,18 @@ fn gather_bodies(b: &Bodies, s: &mut SolveScratch) {
         let s = |d: Vector| r * Mat3::from_diagonal(d) * r.transpose();
         (s(m.map(|m| 1.0 / m.sqrt())), s(m.map(Scalar::sqrt)))
     };
-    s.scale.clear();
-    s.bodies.clear();
-    let (first, second) = s.moving.split_at(s.left);
+    scale.clear();
+    bodies.clear();
+    let (first, second) = moving.split_at(*left);
     for side in [first, second] {
         for &i in side {
-            let (i, (scale, unscale)) = (i as usize, scale(i as usize));
-            s.bodies.push(SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() });
-            s.scale.push(scale);
+            let (i, (s, unscale)) = (i as usize, scales(i as usize));
+            bodies.push(SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() });
+            scale.push(s);
         }
         // The side's static slot.
-        s.scale.push(Mat3::ZERO);
-        s.bodies.push(SolverBody::default());
+        scale.push(Mat3::ZERO);
+        bodies.push(SolverBody::default());
     }
 }
 
@@ -433,7 +477,8 @@ mod tests {
                 .map(|k| if rng.unit() < 0.1 { u32::MAX } else { (k * 13) % last.max(1) as u32 })
                 .collect();
             s.order = keys.clone();
-            sort_from_last_order(&mut s);
+            let last = Ranks { by_pair: &s.by_pair, cached: &s.cached, entries: s.cache.len() };
+            sort_from_last_order(&mut s.order, &last, &mut s.ranked, &mut s.unranked);
             let mut expect = keys;
             expect.sort_unstable();
             assert_eq!(s.order, expect, "round {round}");

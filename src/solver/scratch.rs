@@ -177,6 +177,8 @@ pub struct SolveScratch {
     pub keys: Vec<(u64, u32)>,
     /// Scratch of the solving order's sort: the held pairs by their place in last step's order.
     pub ranked: Vec<(u64, u32)>,
+    /// Scratch of the solving order's sort: the held pairs that were not held last step.
+    pub unranked: Vec<(u64, u32)>,
     /// Each actor's solver-body slot (`u32::MAX` when not in a held pair this step; fixed
     /// bodies map to the last static slot).
     pub slot: Vec<u32>,
