@@ -342,25 +342,37 @@ fn judge_recycling(ctx: &mut StepContext) -> bool {
     if !ctx.scratch.get::<SolveScratch>().is_some_and(last_step) {
         return false;
     }
-    let mut cached = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().cached);
+    let scratch = ctx.scratch.get_mut::<PruneScratch>();
+    let (mut cached, mut pair_of) = (std::mem::take(&mut scratch.cached), std::mem::take(&mut scratch.pair_of));
     let s = ctx.scratch.get_mut::<SolveScratch>();
-    cache_entries(&s.cache, &ctx.pairs, &mut cached);
+    s.entries_of(&ctx.pairs, &mut cached);
     s.recycling_moves = ctx.posed.moves();
     // Entries of earlier steps are left as they are (stale by their step), not rewritten.
     if s.recycling.len() < s.cache.len() {
         s.recycling.resize(s.cache.len(), Recycling::default());
     }
-    let open = |p: &Pair| p.is_candidate() || p.is_near();
-    for (pair, &entry) in ctx.pairs.iter().zip(&cached).filter(|(p, e)| **e != u32::MAX && open(p)) {
-        let (ia, ib) = (pair.a as usize, pair.b as usize);
-        if params.resting_contacts(dt, b.pair_friction(ia, ib)) {
-            s.recycling[entry as usize].step = Some(step);
-        }
+    // Each entry's pair (`u32::MAX` for none), so that the entries are marked in parallel.
+    pair_of.clear();
+    pair_of.resize(s.cache.len(), u32::MAX);
+    for (k, &entry) in cached.iter().enumerate().filter(|(_, e)| **e != u32::MAX) {
+        pair_of[entry as usize] = k as u32;
     }
-    // Four entries at a time (`recycled_four`); lanes past the chunk's judged entries repeat
-    // its first one and are idle.
-    let rows = s.recycling.par_chunks_mut(4).zip(s.cache.par_chunks(4));
-    rows.for_each(|(r, entries)| {
+    // An entry is judged if its pair is open and may rest. Four entries at a time
+    // (`recycled_four`); lanes past the chunk's judged entries repeat its first one and are
+    // idle.
+    let open = |p: &Pair| p.is_candidate() || p.is_near();
+    let resting = params.resting_rule(dt);
+    let judged_now = |k: u32| {
+        let pair = ctx.pairs.get(k as usize).filter(|p| open(p));
+        pair.is_some_and(|p| resting(b.pair_friction(p.a as usize, p.b as usize)))
+    };
+    let rows = s.recycling.par_chunks_mut(4).zip(s.cache.par_chunks(4)).zip(pair_of.par_chunks(4));
+    rows.for_each(|((r, entries), pairs)| {
+        for (r, &k) in r.iter_mut().zip(pairs) {
+            if judged_now(k) {
+                r.step = Some(step);
+            }
+        }
         let mut lanes = [0; 4];
         let mut out = [None, None, None, None];
         let mut n = 0;
@@ -377,7 +389,8 @@ fn judge_recycling(ctx: &mut StepContext) -> bool {
         let thin = ends.map(|(ia, ib)| b.thinner(meshes, ia, ib));
         recycled_four(lanes.map(|j| &entries[j].1.anchors), b, thin, ends, out);
     });
-    ctx.scratch.get_mut::<PruneScratch>().cached = cached;
+    let scratch = ctx.scratch.get_mut::<PruneScratch>();
+    (scratch.cached, scratch.pair_of) = (cached, pair_of);
     true
 }
 
@@ -407,7 +420,7 @@ fn take_recycled(ctx: &mut StepContext) {
     }
     let mut cached = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().cached);
     let s = ctx.scratch.get_mut::<SolveScratch>();
-    cache_entries(&s.cache, &ctx.pairs, &mut cached);
+    s.entries_of(&ctx.pairs, &mut cached);
     for (pair, &entry) in ctx.pairs.iter_mut().zip(&cached).filter(|(p, _)| taken(p)) {
         if let Some(state) = recycled_state(s, entry, step) {
             pair.state = state;
@@ -436,6 +449,8 @@ struct PruneScratch {
     /// Each pair's index in `solve`'s cache (`u32::MAX`: none), left by `judge_recycling` for the
     /// box pairs' pass and found again by `take_recycled`; scratch for the GJK starts between.
     cached: Vec<u32>,
+    /// Each of `solve`'s cache entries' pair (`u32::MAX` for none), for `judge_recycling`.
+    pair_of: Vec<u32>,
     /// Scratch: body i is a many-faced body of a candidate pair.
     wanted: Vec<bool>,
     /// Each such body's world bounds this step (`Placed::bounds`).

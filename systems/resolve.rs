@@ -83,6 +83,7 @@ pub fn collision_impulse(a: &BodyState, b: &BodyState, contact: &Contact, restit
 /// - Cost: O(C) per sweep for C contacts, at most `max_sweeps` sweeps.
 pub fn resolve(_world: &mut World, ctx: &mut StepContext) {
     let threshold = ctx.params.restitution_threshold(ctx.dt);
+    let resting = ctx.params.resting_rule(ctx.dt);
     for sweep in 1..=ctx.params.max_sweeps {
         let mut applied = false;
         for pair in &mut ctx.pairs {
@@ -93,7 +94,7 @@ pub fn resolve(_world: &mut World, ctx: &mut StepContext) {
             // Where `solve` runs it takes the impacts too: it stops the approach over the whole
             // manifold and bounces each point (`solver::restitution`), where one impulse at one
             // point would set the body turning.
-            if ctx.params.resting_contacts(ctx.dt, b.pair_friction(ia, ib)) {
+            if resting(b.pair_friction(ia, ib)) {
                 continue;
             }
             let (mut sa, mut sb) = (state(b, ia), state(b, ib));

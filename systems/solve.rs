@@ -29,7 +29,7 @@ use crate::collision::manifold::{
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
-use crate::solver::{CachedManifold, ContactAnchors, Recycling, SolveScratch, cache_entries, recycle_four};
+use crate::solver::{CachedManifold, ContactAnchors, Recycling, SolveScratch, recycle_four};
 use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prepare_joints, substep_plan};
 use hecs::World;
 use rayon::prelude::*;
@@ -50,7 +50,8 @@ const RECYCLE_DISTANCE: Scalar = 0.03;
 /// - Cost: O(P) to find and build P points, O(P · substeps · (iterations + 2)) to solve.
 pub fn solve(_world: &mut World, ctx: &mut StepContext) {
     let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
-    let resting = |p: &Pair| params.resting_contacts(dt, b.pair_friction(p.a as usize, p.b as usize));
+    let rule = params.resting_rule(dt);
+    let resting = |p: &Pair| rule(b.pair_friction(p.a as usize, p.b as usize));
     let s = ctx.scratch.get_mut::<SolveScratch>();
     s.step = ctx.step;
     s.pairs.clear();
@@ -64,6 +65,7 @@ pub fn solve(_world: &mut World, ctx: &mut StepContext) {
     let s = ctx.scratch.get_mut::<SolveScratch>();
     if s.pairs.is_empty() && joints.joints.is_empty() {
         s.cache.clear();
+        s.cache_keys.clear();
         s.held.clear();
         return;
     }
@@ -104,7 +106,9 @@ fn find_manifolds(ctx: &mut StepContext) {
     s.recycled.resize(n, false);
     s.near.clear();
     s.near.extend(s.pairs.iter().map(|p| p.is_candidate() || p.is_near()));
-    cache_entries(&s.cache, &s.pairs, &mut s.cached);
+    let mut cached = std::mem::take(&mut s.cached);
+    s.entries_of(&s.pairs, &mut cached);
+    s.cached = cached;
     let cache = &s.cache;
     let cached = &s.cached;
     // `prune`'s verdicts, if no body moved since it worked them out (each of this step).
@@ -376,6 +380,12 @@ fn remember(ctx: &mut StepContext) {
     let rows = s.next_cache.par_iter_mut().zip(s.by_pair.par_iter());
     let impulses = rows.map(entry).fold(|| [0; 3], count).reduce(|| [0; 3], add);
     std::mem::swap(&mut s.cache, &mut s.next_cache);
+    let (held, pairs) = (&s.held, &s.pairs);
+    let key = |&h: &u32| {
+        let pair = &pairs[held[h as usize].pair as usize];
+        (pair.a, pair.b)
+    };
+    s.by_pair.par_iter().map(key).collect_into_vec(&mut s.cache_keys);
     for (total, n) in ctx.stats.impulses.iter_mut().zip(impulses) {
         *total += n;
     }

@@ -196,7 +196,7 @@ impl Snapshot {
         sim.time = self.time;
         sim.steps = self.steps;
         sim.impulses = self.contacts;
-        sim.ctx.scratch.get_mut::<SolveScratch>().cache = cache;
+        sim.ctx.scratch.get_mut::<SolveScratch>().set_cache(cache);
         sim.ctx.sleep = sleep;
         if !self.joints.is_empty() {
             let joints = sim.ctx.scratch.get_mut::<Joints>();

@@ -68,6 +68,13 @@ impl Params {
         self.restitution_threshold(dt) > 0.0 || friction > 0.0
     }
 
+    /// `resting_contacts` for the pairs of one step, the threshold (a square root) worked out
+    /// once: `rule(friction)` says whether `solve` holds a pair's contacts.
+    pub fn resting_rule(&self, dt: Scalar) -> impl Fn(Scalar) -> bool + Copy + Send + Sync {
+        let all = self.resting_contacts(dt, 0.0);
+        move |friction| all || friction > 0.0
+    }
+
     /// How far body `i` may travel towards another within one step [m], when `solve` may hold
     /// its contacts (else 0): its speed, gravity's gain over the step and its bounding sphere's
     /// spin, times `dt`. The broad phase widens the body's sphere by it, and `prune` and

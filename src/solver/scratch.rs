@@ -106,14 +106,19 @@ pub struct Recycling {
 /// order, so one merge. Any per-pair list kept so serves (the warm-start cache, `prune`'s GJK
 /// starts).
 pub fn cache_entries<T>(cache: &[((u32, u32), T)], pairs: &[Pair], out: &mut Vec<u32>) {
+    merge_entries(cache.len(), |e| cache[e].0, pairs, out);
+}
+
+/// `cache_entries` of the pairs in a list of `len` entries whose keys `key` gives.
+fn merge_entries(len: usize, key: impl Fn(usize) -> (u32, u32), pairs: &[Pair], out: &mut Vec<u32>) {
     out.clear();
     let mut at = 0;
     for pair in pairs {
-        let key = (pair.a, pair.b);
-        while at < cache.len() && cache[at].0 < key {
+        let wanted = (pair.a, pair.b);
+        while at < len && key(at) < wanted {
             at += 1;
         }
-        out.push(if at < cache.len() && cache[at].0 == key { at as u32 } else { u32::MAX });
+        out.push(if at < len && key(at) == wanted { at as u32 } else { u32::MAX });
     }
 }
 
@@ -148,7 +153,11 @@ pub struct SolveScratch {
     /// so by cache entry: `solve::remember` fills it, and the next step's order starts from it.
     pub by_pair: Vec<u32>,
     /// Last step's anchors and impulses by pair, in pair order (found through `cached`).
+    /// Whatever writes it writes `cache_keys` too (`set_cache`).
     pub cache: Vec<((u32, u32), CachedManifold)>,
+    /// The keys of `cache`'s entries, in its order: what `entries_of` merges the pairs with,
+    /// 8 bytes an entry where a whole entry is about 300.
+    pub cache_keys: Vec<(u32, u32)>,
     /// Scratch of `solve::remember`: the next cache, written while the recycled pairs' anchors
     /// are still read from `cache`, then swapped with it.
     pub next_cache: Vec<((u32, u32), CachedManifold)>,
@@ -195,4 +204,20 @@ pub struct SolveScratch {
     /// The actors the joints hold, each once, in order of first mention (empty without
     /// joints): they get solver bodies whether or not they touch anything.
     pub jointed: Vec<u32>,
+}
+
+impl SolveScratch {
+    /// Replaces the warm-start cache (entries sorted by key, no repeats) and its keys.
+    pub fn set_cache(&mut self, cache: Vec<((u32, u32), CachedManifold)>) {
+        self.cache_keys.clear();
+        self.cache_keys.extend(cache.iter().map(|e| e.0));
+        self.cache = cache;
+    }
+
+    /// Each pair's index in `cache` (`u32::MAX` for none), into `out`: `cache_entries` on the
+    /// compact keys.
+    pub fn entries_of(&self, pairs: &[Pair], out: &mut Vec<u32>) {
+        debug_assert_eq!(self.cache_keys.len(), self.cache.len(), "the keys are the cache's");
+        merge_entries(self.cache_keys.len(), |e| self.cache_keys[e], pairs, out);
+    }
 }
