@@ -11,7 +11,7 @@ use crate::collision::manifold::Manifold;
 use crate::math::{Mat3, Scalar, Vector, total_order_key};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
-use crate::solver::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, SolveScratch};
+use crate::solver::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, PairEnds, SolveScratch};
 
 /// Fastest push out of a penetration [m/s] (Box2D v3's and rapier's 3 m/s): faster, a cube
 /// squeezed into a pile is shot out of it.
@@ -31,16 +31,27 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     // Lowest contacts first: each forward sweep then carries the support up a stack in one
     // pass. The order matters: top-down sweeps let a tall pyramid wobble. Ties keep pair order.
     let up = -params.gravity.normalize_or_zero();
-    s.order.clear();
-    let held = s.manifolds.iter().zip(&s.pairs).enumerate().filter(|(_, (m, p))| is_held(m, p));
     let height = |m: &Manifold| m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar;
-    // Sorted by integer keys (`total_order_key`), cheaper to compare than floats.
-    s.order.extend(held.map(|(k, (m, _))| (total_order_key(height(m)), k as u32)));
+    // One pass over the pairs and manifolds (about 200 bytes a pair) leaves what the rest
+    // reads of them in compact lists: each pair's ends, the held pairs' ends in pair order,
+    // and the solving order's keys.
+    s.order.clear();
+    s.ends.clear();
+    s.held_ends.clear();
+    for (k, (m, pair)) in s.manifolds.iter().zip(&s.pairs).enumerate() {
+        let len = if is_held(m, pair) { m.len as u32 } else { 0 };
+        s.ends.push(PairEnds { a: pair.a, b: pair.b, len });
+        if len > 0 {
+            // Sorted by integer keys (`total_order_key`), cheaper to compare than floats.
+            s.order.push((total_order_key(height(m)), k as u32));
+            s.held_ends.push([pair.a, pair.b]);
+        }
+    }
     // The sort and the solver bodies at once (the bodies do not depend on the order).
     let SolveScratch { order, by_pair, cached, cache, ranked, unranked, .. } = s;
     let last = Ranks { by_pair, cached, entries: cache.len() };
-    let SolveScratch { pairs, manifolds, jointed, slot, moving, keys, left, scale, bodies, .. } = s;
-    let parts = BodyParts { pairs, manifolds, jointed, slot, moving, keys, left, scale, bodies };
+    let SolveScratch { ends, held_ends, jointed, slot, moving, keys, left, scale, bodies, .. } = s;
+    let parts = BodyParts { ends, held_ends, jointed, slot, moving, keys, left, scale, bodies };
     rayon::join(|| sort_from_last_order(order, &last, ranked, unranked), || gather_bodies(b, parts));
     // Each constraint's group: within the first side, within the second, or across; then its
     // batches, each group placed on its own. One thread solves the sides one after the other:
@@ -62,8 +73,8 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     }
     s.held.clear();
     for &(_, k) in &s.order {
-        let pair = &s.pairs[k as usize];
-        let slot = [s.slot[pair.a as usize], s.slot[pair.b as usize]];
+        let ends = s.ends[k as usize];
+        let slot = [s.slot[ends.a as usize], s.slot[ends.b as usize]];
         let side = |i: u32| if i == left || i == last { None } else { Some(i > left) };
         let group = match (side(slot[0]), side(slot[1])) {
             (Some(true), Some(true) | None) | (None, Some(true)) => 1,
@@ -76,13 +87,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         let local = |i: u32| if i == left || i == last { g.static_slot } else { i - g.offset };
         let slot = [local(slot[0]), local(slot[1])];
         g.slots.push(slot);
-        s.held.push(HeldPair {
-            pair: k,
-            group: group as u8,
-            batch: 0,
-            lane: 0,
-            len: s.manifolds[k as usize].len as u8,
-        });
+        s.held.push(HeldPair { pair: k, group: group as u8, batch: 0, lane: 0, len: ends.len as u8 });
     }
     // The two sides' groups placed and filled at once (they write disjoint batches), the third
     // beside the first.
@@ -346,11 +351,11 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     }
 }
 
-/// What `gather_bodies` reads (the pairs, their manifolds, the jointed actors) and writes of
-/// `SolveScratch`, its fields of the same names.
+/// What `gather_bodies` reads (every pair's ends, the held pairs', the jointed actors) and
+/// writes of `SolveScratch`, its fields of the same names.
 struct BodyParts<'a> {
-    pairs: &'a [Pair],
-    manifolds: &'a [Manifold],
+    ends: &'a [PairEnds],
+    held_ends: &'a [[u32; 2]],
     jointed: &'a [u32],
     slot: &'a mut Vec<u32>,
     moving: &'a mut Vec<u32>,
@@ -372,7 +377,7 @@ const SPLIT_MIN: usize = 256;
 /// Every fixed body maps to a static slot. The split depends on the scene only, never on the
 /// thread count, so runs are the same on one thread or two.
 fn gather_bodies(b: &Bodies, parts: BodyParts) {
-    let BodyParts { pairs, manifolds, jointed, slot, moving, keys, left, scale, bodies } = parts;
+    let BodyParts { ends, held_ends, jointed, slot, moving, keys, left, scale, bodies } = parts;
     for &i in moving.iter() {
         slot[i as usize] = u32::MAX;
     }
@@ -385,17 +390,14 @@ fn gather_bodies(b: &Bodies, parts: BodyParts) {
     // solving order is sorted meanwhile.
     const MARKED: u32 = u32::MAX - 1;
     // The joints' bodies after the contacts' (none in a scene without joints).
-    let held = pairs.iter().zip(manifolds).filter(|(p, m)| is_held(m, p));
-    let mut constraints = 0;
-    let ends = held.inspect(|_| constraints += 1).flat_map(|(p, _)| [p.a, p.b]);
-    for i in ends.chain(jointed.iter().copied()) {
+    for &i in held_ends.iter().flatten().chain(jointed) {
         if !b.is_fixed(i as usize) && slot[i as usize] != MARKED {
             slot[i as usize] = MARKED;
             moving.push(i);
         }
     }
     *left = moving.len();
-    if constraints >= SPLIT_MIN {
+    if held_ends.len() >= SPLIT_MIN {
         // The horizontal axis (across gravity) along which the bodies spread widest.
         let spread = |axis: Vector| {
             let along = moving.iter().map(|&i| b.position[i as usize].dot(axis));
@@ -416,7 +418,7 @@ fn gather_bodies(b: &Bodies, parts: BodyParts) {
     for (k, &i) in moving.iter().enumerate() {
         slot[i as usize] = if (k as u32) < cut { k as u32 } else { k as u32 + 1 };
     }
-    for i in pairs.iter().flat_map(|p| [p.a, p.b]).chain(jointed.iter().copied()) {
+    for i in ends.iter().flat_map(|e| [e.a, e.b]).chain(jointed.iter().copied()) {
         if b.is_fixed(i as usize) {
             slot[i as usize] = last;
         }

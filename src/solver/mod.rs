@@ -49,7 +49,9 @@ pub use joints::{Frame, Joint, JointImpulses, JointKind, Joints, Motor, Spring};
 pub use kernel::{restitution, sweep, warm_start};
 pub use lanes::{Batch, FrictionRows, LaneVectors, Lanes, PointRows};
 pub use recycle::recycle_four;
-pub use scratch::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, Recycling, SolveScratch, cache_entries};
+pub use scratch::{
+    CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, PairEnds, Recycling, SolveScratch, cache_entries,
+};
 
 /// A body as the substeps see it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -122,6 +122,17 @@ fn merge_entries(len: usize, key: impl Fn(usize) -> (u32, u32), pairs: &[Pair], 
     }
 }
 
+/// A pair's two bodies and the number of points it is held at (0: not held).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PairEnds {
+    /// Actor index of A.
+    pub a: u32,
+    /// Actor index of B.
+    pub b: u32,
+    /// Points held.
+    pub len: u32,
+}
+
 /// Reused buffers of the contact solver (`solve`), and its warm-start cache, the one piece of
 /// its state that lives from one step to the next (recycled points and impulses; snapshots
 /// carry it, `snapshot::ContactSnapshot`).
@@ -188,6 +199,11 @@ pub struct SolveScratch {
     pub ranked: Vec<(u64, u32)>,
     /// Scratch of the solving order's sort: the held pairs that were not held last step.
     pub unranked: Vec<(u64, u32)>,
+    /// Each pair's bodies and points held (`PairEnds`), in pair order: what building the
+    /// constraints reads of the pairs and manifolds, compact.
+    pub ends: Vec<PairEnds>,
+    /// The bodies of the held pairs, in pair order.
+    pub held_ends: Vec<[u32; 2]>,
     /// Each actor's solver-body slot (`u32::MAX` when not in a held pair this step; fixed
     /// bodies map to the last static slot).
     pub slot: Vec<u32>,
