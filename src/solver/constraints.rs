@@ -90,7 +90,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         s.held.push(HeldPair { pair: k, group: group as u8, batch: 0, lane: 0, len: ends.len as u8 });
     }
     // The two sides' groups placed and filled at once (they write disjoint batches), the third
-    // beside the first.
+    // by whichever thread is free first.
     let SolveScratch { groups, held, pairs, manifolds, slot, scale, cache, cached, anchors, recycled, .. } = s;
     let shared = Shared {
         bodies: b,
@@ -112,7 +112,7 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         place_group(held, which, group);
         fill(&shared, which, group);
     };
-    rayon::join(|| (build(0, first), build(2, across)), || build(1, second));
+    rayon::join(|| build(0, first), || rayon::join(|| build(1, second), || build(2, across)));
     // Each held pair's batch and lane, for `solve::remember`.
     let mut next = [0_usize; 3];
     for held in held.iter_mut() {
