@@ -346,7 +346,10 @@ fn remember(ctx: &mut StepContext) {
     let (recycled, cached, cache) = (&s.recycled, &s.cached, &s.cache);
     // Each entry written in place, the anchors field by field: a whole entry built and then
     // moved in was two calls of memcpy a pair.
-    let entry = |((key, out), &h): (&mut ((u32, u32), CachedManifold), &u32)| {
+    // Each entry's key goes into the entry and into the compact `cache_keys`, which nothing
+    // reads until the swap below: (entry, its compact key), its held pair.
+    type Row<'a> = ((&'a mut ((u32, u32), CachedManifold), &'a mut (u32, u32)), &'a u32);
+    let entry = |(((key, out), compact), &h): Row| {
         let held = &held[h as usize];
         let k = held.pair as usize;
         let anchors = if recycled[k] { &cache[cached[k] as usize].1.anchors } else { &anchors[k] };
@@ -366,6 +369,7 @@ fn remember(ctx: &mut StepContext) {
             out.normal[j] = group.points[batch.first as usize + j].impulse[lane];
         }
         *key = (pairs[k].a, pairs[k].b);
+        *compact = *key;
         // Counted if it pushed.
         out.found.filter(|_| out.normal.iter().any(|&j| j > 0.0))
     };
@@ -377,15 +381,10 @@ fn remember(ctx: &mut StepContext) {
     };
     let add = |a: [u64; 3], b: [u64; 3]| [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
     s.next_cache.resize(s.by_pair.len(), ((0, 0), CachedManifold::default()));
-    let rows = s.next_cache.par_iter_mut().zip(s.by_pair.par_iter());
+    s.cache_keys.resize(s.by_pair.len(), (0, 0));
+    let rows = s.next_cache.par_iter_mut().zip(s.cache_keys.par_iter_mut()).zip(s.by_pair.par_iter());
     let impulses = rows.map(entry).fold(|| [0; 3], count).reduce(|| [0; 3], add);
     std::mem::swap(&mut s.cache, &mut s.next_cache);
-    let (held, pairs) = (&s.held, &s.pairs);
-    let key = |&h: &u32| {
-        let pair = &pairs[held[h as usize].pair as usize];
-        (pair.a, pair.b)
-    };
-    s.by_pair.par_iter().map(key).collect_into_vec(&mut s.cache_keys);
     for (total, n) in ctx.stats.impulses.iter_mut().zip(impulses) {
         *total += n;
     }

@@ -33,25 +33,23 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     let up = -params.gravity.normalize_or_zero();
     let height = |m: &Manifold| m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar;
     // One pass over the pairs and manifolds (about 200 bytes a pair) leaves what the rest
-    // reads of them in compact lists: each pair's ends, the held pairs' ends in pair order,
-    // and the solving order's keys.
+    // reads of them in compact lists: each pair's ends and the solving order's keys.
     s.order.clear();
     s.ends.clear();
-    s.held_ends.clear();
     for (k, (m, pair)) in s.manifolds.iter().zip(&s.pairs).enumerate() {
         let len = if is_held(m, pair) { m.len as u32 } else { 0 };
         s.ends.push(PairEnds { a: pair.a, b: pair.b, len });
         if len > 0 {
             // Sorted by integer keys (`total_order_key`), cheaper to compare than floats.
             s.order.push((total_order_key(height(m)), k as u32));
-            s.held_ends.push([pair.a, pair.b]);
         }
     }
     // The sort and the solver bodies at once (the bodies do not depend on the order).
     let SolveScratch { order, by_pair, cached, cache, ranked, unranked, .. } = s;
     let last = Ranks { by_pair, cached, entries: cache.len() };
-    let SolveScratch { ends, held_ends, jointed, slot, moving, keys, left, scale, bodies, .. } = s;
-    let parts = BodyParts { ends, held_ends, jointed, slot, moving, keys, left, scale, bodies };
+    let held = order.len();
+    let SolveScratch { ends, jointed, slot, moving, keys, left, scale, bodies, .. } = s;
+    let parts = BodyParts { ends, held, jointed, slot, moving, keys, left, scale, bodies };
     rayon::join(|| sort_from_last_order(order, &last, ranked, unranked), || gather_bodies(b, parts));
     // Each constraint's group: within the first side, within the second, or across; then its
     // batches, each group placed on its own. One thread solves the sides one after the other:
@@ -351,11 +349,11 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     }
 }
 
-/// What `gather_bodies` reads (every pair's ends, the held pairs', the jointed actors) and
-/// writes of `SolveScratch`, its fields of the same names.
+/// What `gather_bodies` reads (every pair's ends, the number of held pairs, the jointed
+/// actors) and writes of `SolveScratch`, its fields of the same names.
 struct BodyParts<'a> {
     ends: &'a [PairEnds],
-    held_ends: &'a [[u32; 2]],
+    held: usize,
     jointed: &'a [u32],
     slot: &'a mut Vec<u32>,
     moving: &'a mut Vec<u32>,
@@ -377,7 +375,7 @@ const SPLIT_MIN: usize = 256;
 /// Every fixed body maps to a static slot. The split depends on the scene only, never on the
 /// thread count, so runs are the same on one thread or two.
 fn gather_bodies(b: &Bodies, parts: BodyParts) {
-    let BodyParts { ends, held_ends, jointed, slot, moving, keys, left, scale, bodies } = parts;
+    let BodyParts { ends, held, jointed, slot, moving, keys, left, scale, bodies } = parts;
     for &i in moving.iter() {
         slot[i as usize] = u32::MAX;
     }
@@ -390,14 +388,15 @@ fn gather_bodies(b: &Bodies, parts: BodyParts) {
     // solving order is sorted meanwhile.
     const MARKED: u32 = u32::MAX - 1;
     // The joints' bodies after the contacts' (none in a scene without joints).
-    for &i in held_ends.iter().flatten().chain(jointed) {
+    let held_ends = ends.iter().filter(|e| e.len > 0).flat_map(|e| [e.a, e.b]);
+    for i in held_ends.chain(jointed.iter().copied()) {
         if !b.is_fixed(i as usize) && slot[i as usize] != MARKED {
             slot[i as usize] = MARKED;
             moving.push(i);
         }
     }
     *left = moving.len();
-    if held_ends.len() >= SPLIT_MIN {
+    if held >= SPLIT_MIN {
         // The horizontal axis (across gravity) along which the bodies spread widest.
         let spread = |axis: Vector| {
             let along = moving.iter().map(|&i| b.position[i as usize].dot(axis));

@@ -202,8 +202,6 @@ pub struct SolveScratch {
     /// Each pair's bodies and points held (`PairEnds`), in pair order: what building the
     /// constraints reads of the pairs and manifolds, compact.
     pub ends: Vec<PairEnds>,
-    /// The bodies of the held pairs, in pair order.
-    pub held_ends: Vec<[u32; 2]>,
     /// Each actor's solver-body slot (`u32::MAX` when not in a held pair this step; fixed
     /// bodies map to the last static slot).
     pub slot: Vec<u32>,
