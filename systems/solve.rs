@@ -341,35 +341,37 @@ fn remember(ctx: &mut StepContext) {
         s.by_pair[held.pair as usize] = h as u32;
     }
     s.by_pair.retain(|&h| h != u32::MAX);
+    // A pile at rest holds last step's pairs, in the cache's order: each entry is then its
+    // pair's own and is rewritten in place, and a recycled pair's anchors, already there, are
+    // not copied (most of an entry's bytes).
+    let (held, cached) = (&s.held, &s.cached);
+    let in_place = s.by_pair.len() == s.cache.len()
+        && s.by_pair.iter().enumerate().all(|(e, &h)| cached[held[h as usize].pair as usize] == e as u32);
     // Written in parallel: a serial part of the step waits for both threads.
-    let (held, pairs, groups, anchors, near) = (&s.held, &s.pairs, &s.groups, &s.anchors, &s.near);
-    let (recycled, cached, cache) = (&s.recycled, &s.cached, &s.cache);
-    // Each entry written in place, the anchors field by field: a whole entry built and then
-    // moved in was two calls of memcpy a pair.
-    // Each entry's key goes into the entry and into the compact `cache_keys`, which nothing
-    // reads until the swap below: (entry, its compact key), its held pair.
-    type Row<'a> = ((&'a mut ((u32, u32), CachedManifold), &'a mut (u32, u32)), &'a u32);
-    let entry = |(((key, out), compact), &h): Row| {
+    let (pairs, groups, anchors, near, recycled) = (&s.pairs, &s.groups, &s.anchors, &s.near, &s.recycled);
+    // Held entry h's impulses, verdict and (if given) anchors into `out`; its feature if it
+    // pushed (counted).
+    let write = |out: &mut CachedManifold, h: u32, new: Option<&ContactAnchors>| {
         let held = &held[h as usize];
         let k = held.pair as usize;
-        let anchors = if recycled[k] { &cache[cached[k] as usize].1.anchors } else { &anchors[k] };
+        if let Some(anchors) = new {
+            // Every field named, so a field added to the anchors cannot be left stale here;
+            // field by field: a whole entry built and then moved in was two calls of memcpy.
+            let ContactAnchors { offset, turn, normal, on_a, on_b, len, axis } = anchors;
+            let to = &mut out.anchors;
+            (to.offset, to.turn, to.normal, to.len, to.axis) = (*offset, *turn, *normal, *len, *axis);
+            (to.on_a, to.on_b) = (*on_a, *on_b);
+        }
         let group = &groups[usize::from(held.group)];
         let (batch, lane) = (&group.batches[held.batch as usize], usize::from(held.lane));
         let [n, t1, t2] = batch.axes(lane);
         let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
-        // Every field named, so a field added to the anchors cannot be left stale here.
-        let ContactAnchors { offset, turn, normal, on_a, on_b, len, axis } = anchors;
-        let to = &mut out.anchors;
-        (to.offset, to.turn, to.normal, to.len, to.axis) = (*offset, *turn, *normal, *len, *axis);
-        (to.on_a, to.on_b) = (*on_a, *on_b);
         (out.tangent, out.twist) = (t1 * j1 + t2 * j2, n * jw);
         out.found = pairs[k].contact().filter(|_| !near[k]).map(|c| c.feature);
         out.normal = [0.0; MAX_POINTS];
         for j in 0..usize::from(held.len) {
             out.normal[j] = group.points[batch.first as usize + j].impulse[lane];
         }
-        *key = (pairs[k].a, pairs[k].b);
-        *compact = *key;
         // Counted if it pushed.
         out.found.filter(|_| out.normal.iter().any(|&j| j > 0.0))
     };
@@ -380,11 +382,32 @@ fn remember(ctx: &mut StepContext) {
         counts
     };
     let add = |a: [u64; 3], b: [u64; 3]| [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
-    s.next_cache.resize(s.by_pair.len(), ((0, 0), CachedManifold::default()));
-    s.cache_keys.resize(s.by_pair.len(), (0, 0));
-    let rows = s.next_cache.par_iter_mut().zip(s.cache_keys.par_iter_mut()).zip(s.by_pair.par_iter());
-    let impulses = rows.map(entry).fold(|| [0; 3], count).reduce(|| [0; 3], add);
-    std::mem::swap(&mut s.cache, &mut s.next_cache);
+    let impulses = if in_place {
+        let rows = s.cache.par_iter_mut().zip(s.by_pair.par_iter());
+        let entry = |((_, out), &h): (&mut ((u32, u32), CachedManifold), &u32)| {
+            let k = held[h as usize].pair as usize;
+            write(out, h, (!recycled[k]).then(|| &anchors[k]))
+        };
+        rows.map(entry).fold(|| [0; 3], count).reduce(|| [0; 3], add)
+    } else {
+        let cache = &s.cache;
+        // Each entry's key goes into the entry and into the compact `cache_keys`, which
+        // nothing reads until the swap below: (entry, its compact key), its held pair.
+        type Row<'a> = ((&'a mut ((u32, u32), CachedManifold), &'a mut (u32, u32)), &'a u32);
+        let entry = |(((key, out), compact), &h): Row| {
+            let k = held[h as usize].pair as usize;
+            let anchors = if recycled[k] { &cache[cached[k] as usize].1.anchors } else { &anchors[k] };
+            *key = (pairs[k].a, pairs[k].b);
+            *compact = *key;
+            write(out, h, Some(anchors))
+        };
+        s.next_cache.resize(s.by_pair.len(), ((0, 0), CachedManifold::default()));
+        s.cache_keys.resize(s.by_pair.len(), (0, 0));
+        let rows = s.next_cache.par_iter_mut().zip(s.cache_keys.par_iter_mut()).zip(s.by_pair.par_iter());
+        let impulses = rows.map(entry).fold(|| [0; 3], count).reduce(|| [0; 3], add);
+        std::mem::swap(&mut s.cache, &mut s.next_cache);
+        impulses
+    };
     for (total, n) in ctx.stats.impulses.iter_mut().zip(impulses) {
         *total += n;
     }
