@@ -29,7 +29,7 @@ use crate::collision::manifold::{
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
-use crate::solver::{CachedManifold, ContactAnchors, Recycling, SolveScratch, recycle_four};
+use crate::solver::{CachedManifold, ContactAnchors, PairEnds, Recycling, SolveScratch, recycle_four};
 use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prepare_joints, substep_plan};
 use hecs::World;
 use rayon::prelude::*;
@@ -104,6 +104,8 @@ fn find_manifolds(ctx: &mut StepContext) {
     s.manifolds.resize(n, Manifold::default());
     s.anchors.resize(n, ContactAnchors::default());
     s.recycled.resize(n, false);
+    s.ends.resize(n, PairEnds::default());
+    let up = -params.gravity.normalize_or_zero();
     s.near.clear();
     s.near.extend(s.pairs.iter().map(|p| p.is_candidate() || p.is_near()));
     let mut cached = std::mem::take(&mut s.cached);
@@ -114,8 +116,8 @@ fn find_manifolds(ctx: &mut StepContext) {
     // `prune`'s verdicts, if no body moved since it worked them out (each of this step).
     let judged: &[Recycling] = if s.recycling_moves == ctx.posed.moves() { &s.recycling } else { &[] };
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
-    let rows = rows.zip(s.recycled.par_iter_mut()).zip(cached.par_iter());
-    rows.for_each(|(((pair, m), recycled), &entry)| {
+    let rows = rows.zip(s.recycled.par_iter_mut()).zip(cached.par_iter()).zip(s.ends.par_iter_mut());
+    rows.for_each(|((((pair, m), recycled), &entry), ends)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
         let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.anchors);
@@ -137,6 +139,7 @@ fn find_manifolds(ctx: &mut StepContext) {
                     pair.state = PairState::Candidate; // drawn apart
                 }
             }
+            *ends = PairEnds::of(pair, m, up);
         }
     });
     // Only the pairs found afresh need their bodies posed.
@@ -146,8 +149,8 @@ fn find_manifolds(ctx: &mut StepContext) {
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
     let rows =
         rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter())).zip(cached.par_iter().zip(s.near.par_iter()));
-    let rows = rows.filter(|((_, (_, r)), _)| !**r);
-    rows.for_each_init(ClipScratch::default, |scratch, (((pair, m), (anchors, _)), (&entry, &near))| {
+    let rows = rows.zip(s.ends.par_iter_mut()).filter(|(((_, (_, r)), _), _)| !**r);
+    rows.for_each_init(ClipScratch::default, |scratch, ((((pair, m), (anchors, _)), (&entry, &near)), ends)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
         let reach = reach(ia, ib, thin);
@@ -167,6 +170,7 @@ fn find_manifolds(ctx: &mut StepContext) {
         let Some(axis) = axis else {
             m.len = 0;
             pair.state = PairState::Candidate; // apart: no constraint
+            *ends = PairEnds::of(pair, m, up);
             return;
         };
         *m = manifold(pa, pb, &axis, reach, scratch);
@@ -179,6 +183,7 @@ fn find_manifolds(ctx: &mut StepContext) {
         let contact = Contact { point: m.points[deepest], normal: axis.normal, depth: -axis.separation, feature };
         pair.state = PairState::Resolved(contact);
         *anchors = ContactAnchors { axis: Some(axis.reference), ..fixed_to_bodies(m, axis.normal, b, ia, ib) };
+        *ends = PairEnds::of(pair, m, up);
     });
 }
 

@@ -30,20 +30,9 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     let s = ctx.scratch.get_mut::<SolveScratch>();
     // Lowest contacts first: each forward sweep then carries the support up a stack in one
     // pass. The order matters: top-down sweeps let a tall pyramid wobble. Ties keep pair order.
-    let up = -params.gravity.normalize_or_zero();
-    let height = |m: &Manifold| m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar;
-    // One pass over the pairs and manifolds (about 200 bytes a pair) leaves what the rest
-    // reads of them in compact lists: each pair's ends and the solving order's keys.
+    // Sorted by integer keys (`PairEnds::key`), cheaper to compare than floats.
     s.order.clear();
-    s.ends.clear();
-    for (k, (m, pair)) in s.manifolds.iter().zip(&s.pairs).enumerate() {
-        let len = if is_held(m, pair) { m.len as u32 } else { 0 };
-        s.ends.push(PairEnds { a: pair.a, b: pair.b, len });
-        if len > 0 {
-            // Sorted by integer keys (`total_order_key`), cheaper to compare than floats.
-            s.order.push((total_order_key(height(m)), k as u32));
-        }
-    }
+    s.order.extend(s.ends.iter().enumerate().filter(|(_, e)| e.len > 0).map(|(k, e)| (e.key, k as u32)));
     // The sort and the solver bodies at once (the bodies do not depend on the order).
     let SolveScratch { order, by_pair, cached, cache, ranked, unranked, .. } = s;
     let last = Ranks { by_pair, cached, entries: cache.len() };
@@ -118,11 +107,6 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         (held.batch, held.lane) = groups[g].placed[next[g]];
         next[g] += 1;
     }
-}
-
-/// Whether a pair with manifold `m` is held (a constraint of this step).
-fn is_held(m: &Manifold, pair: &Pair) -> bool {
-    m.len > 0 && pair.contact().is_some()
 }
 
 /// Last step's solving order, as `sort_from_last_order` reads it.

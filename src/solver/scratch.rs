@@ -4,7 +4,7 @@
 
 use crate::collision::contact::{Contact, Feature, Pair};
 use crate::collision::manifold::{MAX_POINTS, Manifold, Reference};
-use crate::math::{Mat3, Quat, Scalar, Vector};
+use crate::math::{Mat3, Quat, Scalar, Vector, total_order_key};
 use crate::solver::{Batch, PointRows, SolverBody};
 
 /// Constraints solved together (see `SolveScratch::groups`), with their own solver-body
@@ -122,7 +122,8 @@ fn merge_entries(len: usize, key: impl Fn(usize) -> (u32, u32), pairs: &[Pair], 
     }
 }
 
-/// A pair's two bodies and the number of points it is held at (0: not held).
+/// A pair's two bodies, the number of points it is held at (0: not held) and its place in
+/// the solving order (`PairEnds::of`).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PairEnds {
     /// Actor index of A.
@@ -131,6 +132,22 @@ pub struct PairEnds {
     pub b: u32,
     /// Points held.
     pub len: u32,
+    /// The height of its points' centre along `up` as a sort key (`total_order_key`; lowest
+    /// first), if held.
+    pub key: u64,
+}
+
+impl PairEnds {
+    /// The ends of `pair` held (or not) at the manifold `m` this step, `up` against gravity:
+    /// worked out where the manifold is, so that building the constraints need not read the
+    /// manifolds again.
+    #[must_use]
+    pub fn of(pair: &Pair, m: &Manifold, up: Vector) -> Self {
+        let held = m.len > 0 && pair.contact().is_some();
+        let height = || m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar;
+        let (len, key) = if held { (m.len as u32, total_order_key(height())) } else { (0, 0) };
+        Self { a: pair.a, b: pair.b, len, key }
+    }
 }
 
 /// Reused buffers of the contact solver (`solve`), and its warm-start cache, the one piece of
