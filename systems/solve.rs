@@ -92,7 +92,8 @@ pub fn solve(_world: &mut World, ctx: &mut StepContext) {
 
 /// Each pair's manifold: recycled from the previous step when the two bodies have hardly
 /// moved relative to each other (`still`), else found afresh along the pair's least-overlap
-/// axis (`contact_axis`, `manifold`).
+/// axis (`contact_axis`, `manifold`). Each pair's `PairEnds` (whether and where it is held,
+/// all that building the constraints reads of it) is written as soon as its manifold is.
 fn find_manifolds(ctx: &mut StepContext) {
     let s = ctx.scratch.get_mut::<SolveScratch>();
     ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut s.speculative);
