@@ -149,20 +149,20 @@ pub fn boxes_separated_by(a: &BoxPose, b: &BoxPose, [wide, proof]: [Scalar; 2]) 
 /// the proof margin widened to the contact margin for pairs that may rest on each other, so
 /// `solve` still sees them while apart by less (a micro-bounce must not lose a stack's
 /// contact); apart by more than the second, no detection test can fire (`separated`).
-/// `speculative` holds each body's speculative distance; `all_rest` says whether every pair
-/// may rest (`Params::resting_contacts` with no friction), worked out once, not per pair;
-/// `thin` is the thinner body's thickness (`Bodies::thinner`).
+/// `speculative` holds each body's speculative distance; `resting` says from a pair's friction
+/// whether it may rest (`Params::resting_rule`); `thin` is the thinner body's thickness
+/// (`Bodies::thinner`).
 #[inline]
 fn pair_margin(
     p: &Pair,
     b: &Bodies,
     thin: Scalar,
     params: &Params,
-    (all_rest, speculative): (bool, &[Scalar]),
+    (resting, speculative): (impl Fn(Scalar) -> bool, &[Scalar]),
 ) -> (Scalar, Scalar) {
     let (ia, ib) = (p.a as usize, p.b as usize);
     let proof = PRUNE_MARGIN * (b.radius[ia] + b.radius[ib]);
-    if all_rest || b.pair_friction(ia, ib) > 0.0 {
+    if resting(b.pair_friction(ia, ib)) {
         let speculative = speculative[ia] + speculative[ib];
         (proof.max(params.contact_margin * thin + speculative), proof)
     } else {
@@ -218,7 +218,7 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     // in the same pass as the box pairs' proofs.
     let judged = judge_recycling(ctx);
     let (b, meshes, params) = (&ctx.bodies, &ctx.meshes, &ctx.params);
-    let all_rest = params.resting_contacts(ctx.dt, 0.0);
+    let may_rest = params.resting_rule(ctx.dt);
     let pose =
         |i: u32, half: Vector| BoxPose { position: b.position[i as usize], rotation: b.rotation[i as usize], half };
     // `judge_recycling` left each pair's cache entry in `cached`.
@@ -233,7 +233,7 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
             pair.state = state;
         } else if let (Some(ha), Some(hb)) = (ma.box_half_extents, mb.box_half_extents) {
             let thin = ma.thickness.min(mb.thickness);
-            let margins = pair_margin(pair, b, thin, params, (all_rest, &speculative));
+            let margins = pair_margin(pair, b, thin, params, (may_rest, &speculative));
             let (ba, bb) = (pose(pair.a, ha), pose(pair.b, hb));
             classify(pair, margins, |m| boxes_separated_by(&ba, &bb, m));
         }
@@ -277,7 +277,7 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let bounds = &*bounds;
     let (posed, params) = (&ctx.posed, &ctx.params);
     let margin =
-        |p: &Pair| pair_margin(p, b, b.thinner(meshes, p.a as usize, p.b as usize), params, (all_rest, &speculative));
+        |p: &Pair| pair_margin(p, b, b.thinner(meshes, p.a as usize, p.b as usize), params, (may_rest, &speculative));
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     let shape = |i: u32| if many(i) { Shape::Placed(placed(i as usize)) } else { Shape::Posed(posed.get(i)) };
     let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };
