@@ -230,6 +230,8 @@ const MARGIN: Scalar = 0.3;
 /// Relative room left for rounding in the two sphere tests and the distance moved (each a
 /// few ulps, about 1e-15): see `PairCache`.
 const SLACK: Scalar = 1e-9;
+/// Relative rounding of a coordinate carried by a frame, with room: a few ulps.
+const ROUNDING: Scalar = 4.0 * Scalar::EPSILON;
 /// Bodies whose widened reach is below this [m] always rebuild: squares of smaller lengths
 /// near the bottom of f64's range lose their relative precision.
 const TINY: Scalar = 1e-140;
@@ -249,13 +251,16 @@ const MAX_BACKOFF: u32 = 32;
 ///
 /// Why the filter gives exactly the grid's list: say body i was anchored (at the rebuild, or
 /// later by `reanchor`) at `X_i` with widened reach `W_i`, the list holds every pair whose
-/// spheres (X, W) overlap, and today body i is `d_i = |x_i − X_i|` away with reach `r_i`,
+/// spheres (X, W) overlap, and today, after every anchor is carried by one common translation
+/// `T` (`frame`), body i is `d_i = |x_i − T − X_i|` away with reach `r_i`,
 /// `d_i + r_i ≤ W_i·(1 − SLACK)` (`holds`). If a pair passes today's test,
 /// `|x_i − x_j| ≤ r_i + r_j`, then by the triangle inequality
-/// `|X_i − X_j| ≤ |x_i − x_j| + d_i + d_j ≤ (W_i + W_j)·(1 − SLACK)`: its anchored spheres
-/// overlap with room to spare, so it is in the list. SLACK dwarfs the rounding of the two
-/// tests and of `d_i` (relative errors of a few ulps while no square leaves f64's normal
-/// range, which `TINY` ensures). The list is sorted, so the filtered one is in the grid's
+/// `|X_i − X_j| ≤ |(x_i − T) − (x_j − T)| + d_i + d_j ≤ (W_i + W_j)·(1 − SLACK)`: its anchored
+/// spheres overlap with room to spare, so it is in the list. A common translation moves no
+/// body relative to another, so a rain falling as one keeps its list (`holds` tries the free
+/// bodies' mean shift). SLACK dwarfs the rounding of the two tests and of `d_i` (relative
+/// errors of a few ulps while no square leaves f64's normal range, which `TINY` ensures;
+/// `ROUNDING` adds the rounding of `x_i − T`). The list is sorted, so the filtered one is in the grid's
 /// order. A pair of two bodies fixed at their anchoring is left out: a body fixed then (fixed
 /// or asleep) and free now is anchored afresh. Joined pairs are dropped after, as always.
 #[derive(Clone, Debug, Default)]
@@ -264,8 +269,11 @@ pub struct PairCache {
     pub valid: bool,
     /// The superset, sorted by (a, b).
     pub pairs: Vec<(u32, u32)>,
-    /// Each body's centre at its anchoring [m].
+    /// Each body's centre at its anchoring, less the `frame` of then [m].
     pub anchor: Vec<Vector>,
+    /// The common translation `T` carrying the anchors to today's bodies [m]: zero at a
+    /// rebuild, then the one `holds` found.
+    pub frame: Vector,
     /// Each body's widened reach at its anchoring [m].
     pub bound: Vec<Scalar>,
     /// `bound·(1 − SLACK) − TINY`: the most `d_i + r_i` may be [m].
@@ -291,15 +299,37 @@ pub struct PairCache {
 impl PairCache {
     /// The list still covers every candidate once the bodies that left their bounds (at most
     /// `MAX_MOVED`, listed in `moved`) are anchored afresh (`reanchor`): same body count, the
-    /// others within their bounds and none of them fixed at its anchoring and free now.
+    /// others within their bounds and none of them fixed at its anchoring and free now. The
+    /// bounds are tried carried by the free bodies' mean shift since their anchoring, then by
+    /// last step's `frame`; the first that holds becomes the `frame`.
     fn holds(&mut self, b: &Bodies, reach: &[Scalar]) -> bool {
         self.moved.clear();
         if !self.valid || self.anchor.len() != b.len() {
             return false;
         }
+        let free = (0..b.len()).filter(|&i| !b.is_fixed(i));
+        let (sum, count) = free.fold((Vector::ZERO, 0_u32), |(s, n), i| (s + (b.position[i] - self.anchor[i]), n + 1));
+        let mean = if count == 0 { self.frame } else { sum / Scalar::from(count) };
+        let held = self.within(b, reach, mean) || (mean != self.frame && self.within(b, reach, self.frame));
+        if held {
+            self.served += 1;
+        } else {
+            self.moved.clear();
+        }
+        held
+    }
+
+    /// Lists in `moved` the bodies outside their bounds carried by `frame`, and sets the frame,
+    /// unless more than `MAX_MOVED` are outside. `ROUNDING` covers the one rounding of
+    /// `x − frame` that `x − X` alone would not have.
+    fn within(&mut self, b: &Bodies, reach: &[Scalar], frame: Vector) -> bool {
+        self.moved.clear();
+        let shift = frame.abs().max_element();
         for (i, &r) in reach.iter().enumerate() {
-            let inside =
-                (!self.fixed[i] || b.is_fixed(i)) && (b.position[i] - self.anchor[i]).length() + r <= self.limit[i];
+            let x = b.position[i];
+            let rounding = ROUNDING * (x.abs().max_element() + shift);
+            let inside = (!self.fixed[i] || b.is_fixed(i))
+                && ((x - frame) - self.anchor[i]).length() + r + rounding <= self.limit[i];
             if !inside {
                 if self.moved.len() == MAX_MOVED {
                     return false;
@@ -307,7 +337,7 @@ impl PairCache {
                 self.moved.push(i as u32);
             }
         }
-        self.served += 1;
+        self.frame = frame;
         true
     }
 
@@ -318,7 +348,7 @@ impl PairCache {
         self.mark.resize(b.len(), false);
         for &k in &self.moved {
             let k = k as usize;
-            self.anchor[k] = b.position[k];
+            self.anchor[k] = b.position[k] - self.frame;
             self.bound[k] = reach[k] * (1.0 + MARGIN);
             self.limit[k] = self.bound[k] * (1.0 - SLACK) - TINY;
             self.fixed[k] = b.is_fixed(k);
@@ -380,6 +410,7 @@ impl PairCache {
         }
         self.anchor.clear();
         self.anchor.extend_from_slice(&b.position);
+        self.frame = Vector::ZERO;
         self.limit.clear();
         self.limit.extend(bound.iter().map(|w| w * (1.0 - SLACK) - TINY));
         self.fixed.clear();
@@ -483,14 +514,12 @@ impl Grid {
         for c in 0..cells {
             s.cell_start[c + 1] += s.cell_start[c];
         }
-        s.order.clear();
-        s.order.resize(count, CellEntry::default());
+        s.order.reset(count);
         s.fill.clear();
         s.fill.extend_from_slice(&s.cell_start);
         for i in ordinary() {
             let c = s.cell_of[i] as usize;
-            s.order[s.fill[c] as usize] =
-                CellEntry { position: b.position[i], radius: radius[i], index: i as u32, fixed: b.is_fixed(i) };
+            s.order.set(s.fill[c] as usize, b.position[i], radius[i], i as u32, b.is_fixed(i));
             s.fill[c] += 1;
         }
         grid
@@ -511,13 +540,14 @@ impl Grid {
         i: usize,
         b: &Bodies,
         radius: &[Scalar],
-        (start, order): (&[u32], &[CellEntry]),
+        (start, order): (&[u32], &CellBodies),
         large: &[u32],
         out: &mut Vec<(u32, u32)>,
     ) {
         let (xi, ri, fixed_i) = (b.position[i], radius[i], b.is_fixed(i));
-        // The candidate test of `cull_all_pairs`, given body j's centre, radius and fixedness.
-        // Every body tested is written after the last candidate and counted only if it is one:
+        // The candidate test of `cull_all_pairs`, given body j's centre, radius and fixedness,
+        // for the large bodies (the grid's cells go through `CellBodies::scan`). Every body
+        // tested is written after the last candidate and counted only if it is one:
         // which neighbours pass is close to random, and a branch on it would be mispredicted
         // about as often as not.
         let mut n = out.len();
@@ -540,13 +570,11 @@ impl Grid {
             for y in range(1) {
                 let row = self.index([0, y, z]);
                 let (x0, x1) = (*range(0).start(), *range(0).end());
-                let cells = &order[start[row + x0] as usize..start[row + x1 + 1] as usize];
-                out.resize(n + cells.len(), (0, 0));
-                for e in cells {
-                    n = consider(n, (e.index as usize, e.position, e.radius, e.fixed), out);
-                }
+                let run = start[row + x0] as usize..start[row + x1 + 1] as usize;
+                order.scan(run, (i as u32, xi, ri, fixed_i), out);
             }
         }
+        n = out.len();
         out.resize(n + large.len(), (0, 0));
         for &j in large {
             n = consider(n, row_of(j as usize), out);
@@ -555,17 +583,83 @@ impl Grid {
     }
 }
 
-/// One body in the grid's cell-sorted list.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CellEntry {
-    /// Centre [m].
-    pub position: Vector,
-    /// Bounding radius [m].
-    pub radius: Scalar,
-    /// Actor index.
-    pub index: u32,
-    /// Fixed actor.
-    pub fixed: bool,
+/// The grid's bodies sorted by cell, a field to an array, so that a neighbour scan tests four
+/// bodies at once (`scan`). `SCAN_LANES − 1` entries infinitely far away follow the last, so
+/// that the last four of a run may be read past its end.
+#[derive(Clone, Debug, Default)]
+pub struct CellBodies {
+    /// Centres' x, y and z [m].
+    pub x: Vec<Scalar>,
+    pub y: Vec<Scalar>,
+    pub z: Vec<Scalar>,
+    /// Bounding radii (widened, as the search is asked) [m].
+    pub radius: Vec<Scalar>,
+    /// Actor indices.
+    pub index: Vec<u32>,
+    /// Fixed actors.
+    pub fixed: Vec<bool>,
+}
+
+/// Bodies a scan tests at once: one `f64x4` register a field.
+const SCAN_LANES: usize = 4;
+
+impl CellBodies {
+    /// Makes room for `count` bodies and the padding after them.
+    fn reset(&mut self, count: usize) {
+        let len = count + SCAN_LANES - 1;
+        for v in [&mut self.x, &mut self.y, &mut self.z] {
+            v.clear();
+            v.resize(len, Scalar::INFINITY);
+        }
+        self.radius.clear();
+        self.radius.resize(len, 0.0);
+        self.index.clear();
+        self.index.resize(len, 0);
+        self.fixed.clear();
+        self.fixed.resize(len, true);
+    }
+
+    /// Entry k: body `index` at `x`.
+    fn set(&mut self, k: usize, x: Vector, radius: Scalar, index: u32, fixed: bool) {
+        (self.x[k], self.y[k], self.z[k], self.radius[k]) = (x.x, x.y, x.z, radius);
+        (self.index[k], self.fixed[k]) = (index, fixed);
+    }
+
+    /// Appends `(i, j)` for each body j of `run` that is a candidate partner of body i (centre
+    /// `xi`, radius `ri`): `j > i`, not both fixed, spheres overlapping. `spheres_overlap`'s
+    /// arithmetic four bodies at a time (the same bits: the difference's sign does not change
+    /// its square), so only the rare overlaps branch.
+    #[inline]
+    fn scan(
+        &self,
+        run: std::ops::Range<usize>,
+        (i, xi, ri, fixed_i): (u32, Vector, Scalar, bool),
+        out: &mut Vec<(u32, u32)>,
+    ) {
+        type Reg = wide::f64x4;
+        let (px, py, pz, pr) = (Reg::splat(xi.x), Reg::splat(xi.y), Reg::splat(xi.z), Reg::splat(ri));
+        // One bounds check for a field's four lanes, not one a lane.
+        let load = |v: &[Scalar], k: usize| -> Reg {
+            let four: [Scalar; SCAN_LANES] = v[k..k + SCAN_LANES].try_into().expect("four lanes");
+            Reg::new(four)
+        };
+        let mut k = run.start;
+        while k < run.end {
+            let (dx, dy, dz) = (load(&self.x, k) - px, load(&self.y, k) - py, load(&self.z, k) - pz);
+            let r = load(&self.radius, k) + pr;
+            let within = if run.end - k >= SCAN_LANES { 0b1111 } else { (1_u32 << (run.end - k)) - 1 };
+            let mut hits = (dx * dx + dy * dy + dz * dz).simd_le(r * r).to_bitmask() & within;
+            k += SCAN_LANES;
+            while hits != 0 {
+                let l = k - SCAN_LANES + hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let j = self.index[l];
+                if j > i && !(fixed_i && self.fixed[l]) {
+                    out.push((i, j));
+                }
+            }
+        }
+    }
 }
 
 /// Reused buffers of the grid broad phase (`cull`).
@@ -586,9 +680,9 @@ pub struct CullScratch {
     pub cell_start: Vec<u32>,
     /// Fill cursors while binning.
     pub fill: Vec<u32>,
-    /// Bodies sorted by cell, with what the sphere test reads, so a neighbour scan reads one
-    /// contiguous run instead of three scattered arrays.
-    pub order: Vec<CellEntry>,
+    /// Bodies sorted by cell, with what the sphere test reads, so a neighbour scan reads
+    /// contiguous runs.
+    pub order: CellBodies,
     /// Pairs (a, b) found per chunk of bodies, concatenated in order; 8 bytes each, not a
     /// whole `Pair`, because at 64 000 cubes they are 270 000 and memory traffic dominates.
     pub chunks: Vec<Vec<(u32, u32)>>,
@@ -748,11 +842,20 @@ mod tests {
         pos[30] += Vector::new(0.3, 0.0, 0.0);
         assert_eq!(check(&mut sim, set(&pos)).0, Way::Reanchored);
         assert_eq!(check(&mut sim, set(&pos)).0, Way::Kept);
-        // All move: rebuilt; and again at once: a list that served one step, so the plain
-        // grid for a while.
-        // Past each ball's room, MARGIN times its reach.
+        // All free balls move together, past each one's room (MARGIN times its reach): the list
+        // holds, carried by their shift; only the two fixed balls, left behind, are anchored
+        // afresh.
         let far = 1.5 * MARGIN * r;
-        let shift = |pos: &mut Vec<Vector>| pos.iter_mut().skip(2).for_each(|x| *x += Vector::new(far, 0.0, 0.0));
+        pos.iter_mut().skip(2).for_each(|x| *x += Vector::new(far, far, 0.0));
+        let (w, _) = check(&mut sim, set(&pos));
+        assert_eq!((w, sim.ctx.scratch.get_mut::<CullScratch>().cache.moved.clone()), (Way::Reanchored, vec![0, 1]));
+        assert_eq!(check(&mut sim, set(&pos)).0, Way::Kept);
+        // All move apart from each other: rebuilt; and again at once: a list that served one
+        // step, so the plain grid for a while.
+        let shift = |pos: &mut Vec<Vector>| {
+            let apart = |k: usize| Vector::new(if k.is_multiple_of(2) { far } else { -far }, 0.0, 0.0);
+            pos.iter_mut().skip(2).enumerate().for_each(|(k, x)| *x += apart(k));
+        };
         shift(&mut pos);
         assert_eq!(check(&mut sim, set(&pos)).0, Way::Rebuilt);
         shift(&mut pos);
@@ -782,7 +885,8 @@ mod tests {
         let scratch = std::mem::take(&mut bigger.ctx.scratch);
         let mut other = lattice(7);
         other.ctx.scratch = scratch;
-        let moved = |b: &mut Bodies| b.position.iter_mut().for_each(|x| *x += Vector::new(0.0, 0.3, 0.0));
+        let sign = |k: usize| if k.is_multiple_of(2) { 0.3 } else { -0.3 };
+        let moved = |b: &mut Bodies| b.position.iter_mut().enumerate().for_each(|(k, x)| x.y += sign(k));
         assert_eq!(check(&mut other, moved).0, Way::Rebuilt);
     }
 
@@ -890,10 +994,16 @@ mod tests {
             let mut sim = sim_of(&cubes, false);
             let mut pos = positions(&mut sim);
             for _ in 0..30 {
-                // Mostly tiny moves, now and then one past the margin; sometimes a fixed body wakes.
+                // Mostly tiny moves, now and then one past the margin, now and then all carried
+                // together (a falling crowd) by up to five steps; sometimes a fixed body wakes.
                 let scale = if rng.unit() < 0.1 { step * 5.0 } else { step * 0.05 };
+                let together = rng.unit() < 0.3;
+                let drift = Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)) * step * 5.0;
                 for x in &mut pos {
                     *x += Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)) * scale;
+                    if together {
+                        *x += drift;
+                    }
                 }
                 let wake = (rng.unit() < 0.1).then(|| rng.next_u64() as usize % n);
                 check(&mut sim, |b| {
