@@ -169,17 +169,17 @@ const FILTER_CHUNK: usize = 1024;
 pub fn cull(_world: &mut World, ctx: &mut StepContext) {
     reach(ctx);
     let s = ctx.scratch.get_mut::<CullScratch>();
-    let b = &ctx.bodies;
+    let (b, dt) = (&ctx.bodies, ctx.dt);
     if s.cache.holds(b, &s.reach) {
         if !s.cache.moved.is_empty() {
-            s.cache.reanchor(b, &s.reach);
+            s.cache.reanchor(b, dt, &s.reach);
         }
     } else {
         let reach = std::mem::take(&mut s.reach);
         if s.cache.rebuild_now() {
             let mut bound = std::mem::take(&mut s.cache.bound);
             bound.clear();
-            bound.extend(reach.iter().map(|r| r * (1.0 + MARGIN)));
+            bound.extend(reach.iter().enumerate().map(|(i, &r)| widened(b, dt, i, r)));
             let chunks = grid_pairs(b, &bound, s);
             s.cache.rebuilt(b, bound, &s.chunks[..chunks]);
         } else {
@@ -227,6 +227,12 @@ fn grid_pairs(b: &Bodies, reach: &[Scalar], s: &mut CullScratch) -> usize {
 /// (0.18 m a step) in a list for several steps; a wider list costs more to filter each step
 /// than its rarer rebuilds save (BENCH.md).
 const MARGIN: Scalar = 0.3;
+/// A slow body's room is what it would travel in this many steps at today's speed, at least
+/// `MIN_ROOM` of its reach and at most `MARGIN`: a resting pile's list then holds little more
+/// than its candidates, and the filter reads fewer pairs each step.
+const ROOM_STEPS: Scalar = 8.0;
+/// The least room, as a fraction of the reach.
+const MIN_ROOM: Scalar = 0.05;
 /// Relative room left for rounding in the two sphere tests and the distance moved (each a
 /// few ulps, about 1e-15): see `PairCache`.
 const SLACK: Scalar = 1e-9;
@@ -245,6 +251,12 @@ const MIN_SERVED: u32 = 4;
 /// Most plain grid steps in a row before a list is tried again, after lists that served fewer
 /// than `MIN_SERVED` steps.
 const MAX_BACKOFF: u32 = 32;
+
+/// Body i's reach `r` widened by its room (`ROOM_STEPS`) for a kept list.
+fn widened(b: &Bodies, dt: Scalar, i: usize, r: Scalar) -> Scalar {
+    let travel = (b.velocity[i].length() + b.angular_velocity[i].length() * b.radius[i]) * dt;
+    r + (ROOM_STEPS * travel).max(MIN_ROOM * r).min(MARGIN * r)
+}
 
 /// A superset of the candidate pairs, kept from step to step: the grid's pairs for reaches
 /// widened by `MARGIN` at some step (the rebuild), filtered each later step by the exact test.
@@ -344,12 +356,12 @@ impl PairCache {
     /// Anchors the `moved` bodies where they are now and replaces their pairs by the ones
     /// their new bounds give, tested against every body's anchor: the list is then the one a
     /// rebuild with these anchors would give, in the same order.
-    fn reanchor(&mut self, b: &Bodies, reach: &[Scalar]) {
+    fn reanchor(&mut self, b: &Bodies, dt: Scalar, reach: &[Scalar]) {
         self.mark.resize(b.len(), false);
         for &k in &self.moved {
             let k = k as usize;
             self.anchor[k] = b.position[k] - self.frame;
-            self.bound[k] = reach[k] * (1.0 + MARGIN);
+            self.bound[k] = widened(b, dt, k, reach[k]);
             self.limit[k] = self.bound[k] * (1.0 - SLACK) - TINY;
             self.fixed[k] = b.is_fixed(k);
             self.mark[k] = true;
