@@ -222,8 +222,8 @@ fn grid_pairs(b: &Bodies, reach: &[Scalar], s: &mut CullScratch) -> usize {
     chunks
 }
 
-/// A kept list's reaches are today's widened by this fraction: room for each body to move
-/// before the list must be built again. A third of the reach keeps box-gas's fastest cubes
+/// The most room a body gets in a kept list, as a fraction of its reach: room to move before
+/// the list must be built again (`widened`). A third of the reach keeps box-gas's fastest cubes
 /// (0.18 m a step) in a list for several steps; a wider list costs more to filter each step
 /// than its rarer rebuilds save (BENCH.md).
 const MARGIN: Scalar = 0.3;
@@ -259,7 +259,8 @@ fn widened(b: &Bodies, dt: Scalar, i: usize, r: Scalar) -> Scalar {
 }
 
 /// A superset of the candidate pairs, kept from step to step: the grid's pairs for reaches
-/// widened by `MARGIN` at some step (the rebuild), filtered each later step by the exact test.
+/// widened by their room (`widened`) at some step (the rebuild), filtered each later step by the
+/// exact test.
 ///
 /// Why the filter gives exactly the grid's list: say body i was anchored (at the rebuild, or
 /// later by `reanchor`) at `X_i` with widened reach `W_i`, the list holds every pair whose
@@ -272,8 +273,8 @@ fn widened(b: &Bodies, dt: Scalar, i: usize, r: Scalar) -> Scalar {
 /// body relative to another, so a rain falling as one keeps its list (`holds` tries the free
 /// bodies' mean shift). SLACK dwarfs the rounding of the two tests and of `d_i` (relative
 /// errors of a few ulps while no square leaves f64's normal range, which `TINY` ensures;
-/// `ROUNDING` adds the rounding of `x_i − T`). The list is sorted, so the filtered one is in the grid's
-/// order. A pair of two bodies fixed at their anchoring is left out: a body fixed then (fixed
+/// `ROUNDING` adds the rounding of `x_i − T`). The list is sorted, so the filtered one is in
+/// the grid's order. A pair of two bodies fixed at their anchoring is left out: a body fixed then (fixed
 /// or asleep) and free now is anchored afresh. Joined pairs are dropped after, as always.
 #[derive(Clone, Debug, Default)]
 pub struct PairCache {
@@ -854,9 +855,9 @@ mod tests {
         pos[30] += Vector::new(0.3, 0.0, 0.0);
         assert_eq!(check(&mut sim, set(&pos)).0, Way::Reanchored);
         assert_eq!(check(&mut sim, set(&pos)).0, Way::Kept);
-        // All free balls move together, past each one's room (MARGIN times its reach): the list
-        // holds, carried by their shift; only the two fixed balls, left behind, are anchored
-        // afresh.
+        // All free balls move together, past the most room any has (MARGIN times its reach):
+        // the list holds, carried by their shift; only the two fixed balls, left behind, are
+        // anchored afresh.
         let far = 1.5 * MARGIN * r;
         pos.iter_mut().skip(2).for_each(|x| *x += Vector::new(far, far, 0.0));
         let (w, _) = check(&mut sim, set(&pos));
