@@ -11,8 +11,11 @@ use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
 use crate::solver::Joints;
 use crate::systems::prune::PRUNE_MARGIN;
+use cells::AnchorCells;
 use hecs::World;
 use rayon::prelude::*;
+
+mod cells;
 
 /// The candidate test: `|x_a − x_b| ≤ r_a + r_b`. The paper compares half a centre-to-corner
 /// distance against each radius separately, which misses touching cubes (E1).
@@ -180,10 +183,11 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
             let mut bound = std::mem::take(&mut s.cache.bound);
             bound.clear();
             bound.extend(reach.iter().enumerate().map(|(i, &r)| widened(b, dt, i, r)));
-            let chunks = grid_pairs(b, &bound, s);
+            let (chunks, grid) = grid_pairs(b, &bound, s);
             s.cache.rebuilt(b, bound, &s.chunks[..chunks]);
+            s.cache.cells.build(grid, &s.cell_of);
         } else {
-            let chunks = grid_pairs(b, &reach, s);
+            let (chunks, _) = grid_pairs(b, &reach, s);
             for chunk in &s.chunks[..chunks] {
                 let meet = chunk.iter().filter(|&&(i, j)| s.bounds.meet(i as usize, j as usize));
                 ctx.pairs.extend(meet.map(|&(a, b)| Pair::candidate(a, b)));
@@ -199,8 +203,9 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
 }
 
 /// The grid search: every pair (a < b, not both fixed) whose spheres of radius `reach`
-/// overlap, sorted, into `s.chunks[..count]` (concatenated in order); returns the count.
-fn grid_pairs(b: &Bodies, reach: &[Scalar], s: &mut CullScratch) -> usize {
+/// overlap, sorted, into `s.chunks[..count]` (concatenated in order); returns the count and
+/// the grid (its bodies' cells in `s.cell_of`).
+fn grid_pairs(b: &Bodies, reach: &[Scalar], s: &mut CullScratch) -> (usize, Grid) {
     let n = b.len();
     let threshold = large_threshold(reach, &mut s.radii);
     s.large.clear();
@@ -219,7 +224,7 @@ fn grid_pairs(b: &Bodies, reach: &[Scalar], s: &mut CullScratch) -> usize {
             out[first..].sort_unstable_by_key(|&(_, b)| b);
         }
     });
-    chunks
+    (chunks, grid)
 }
 
 /// The most room a body gets in a kept list, as a fraction of its reach: room to move before
@@ -241,8 +246,9 @@ const ROUNDING: Scalar = 4.0 * Scalar::EPSILON;
 /// Bodies whose widened reach is below this [m] always rebuild: squares of smaller lengths
 /// near the bottom of f64's range lose their relative precision.
 const TINY: Scalar = 1e-140;
-/// Most bodies anchored afresh in a step (each tested against every body) before the whole
-/// list is built again instead.
+/// Most bodies anchored afresh in a step (each tested against the bodies of its neighbouring
+/// cells, `AnchorCells`) before the whole list is built again instead: more cost more, in
+/// sorting and merging their pairs into a list widened for fast bodies, than the grid (BENCH.md).
 const MAX_MOVED: usize = 32;
 /// A list that served fewer steps than this cost more than it saved (a rebuild costs about
 /// as much as three filtered steps save): the plain grid runs for a while (box-gas, a rain
@@ -307,6 +313,8 @@ pub struct PairCache {
     pub fresh: Vec<(u32, u32)>,
     /// Scratch: the merged list, swapped with `pairs`.
     pub spare: Vec<(u32, u32)>,
+    /// The bodies binned by their anchors, for `reanchor`.
+    cells: AnchorCells,
 }
 
 impl PairCache {
@@ -355,8 +363,9 @@ impl PairCache {
     }
 
     /// Anchors the `moved` bodies where they are now and replaces their pairs by the ones
-    /// their new bounds give, tested against every body's anchor: the list is then the one a
-    /// rebuild with these anchors would give, in the same order.
+    /// their new bounds give, tested against the anchors of the bodies in their neighbouring
+    /// cells (`AnchorCells`; every body, for one too wide for the cells): the list is then the
+    /// one a rebuild with these anchors would give, in the same order.
     fn reanchor(&mut self, b: &Bodies, dt: Scalar, reach: &[Scalar]) {
         self.mark.resize(b.len(), false);
         for &k in &self.moved {
@@ -366,16 +375,21 @@ impl PairCache {
             self.limit[k] = self.bound[k] * (1.0 - SLACK) - TINY;
             self.fixed[k] = b.is_fixed(k);
             self.mark[k] = true;
+            self.cells.rebin(k, self.anchor[k], self.bound[k]);
         }
         self.fresh.clear();
+        let (anchor, bound, fixed, mark, fresh) = (&self.anchor, &self.bound, &self.fixed, &self.mark, &mut self.fresh);
         for &k in &self.moved {
             let k = k as usize;
-            for j in 0..b.len() {
+            let mut test = |j: usize| {
                 // A pair of two moved bodies once, from the lower; none of two fixed ones.
-                let skip = (self.mark[j] && j <= k) || (self.fixed[k] && self.fixed[j]);
-                if !skip && spheres_overlap(self.anchor[k], self.bound[k], self.anchor[j], self.bound[j]) {
-                    self.fresh.push((k.min(j) as u32, k.max(j) as u32));
+                let skip = (mark[j] && j <= k) || (fixed[k] && fixed[j]);
+                if !skip && spheres_overlap(anchor[k], bound[k], anchor[j], bound[j]) {
+                    fresh.push((k.min(j) as u32, k.max(j) as u32));
                 }
+            };
+            if !self.cells.near(k, anchor[k], &mut test) {
+                (0..b.len()).for_each(test);
             }
         }
         self.fresh.sort_unstable();
@@ -408,6 +422,7 @@ impl PairCache {
             self.backoff = 1;
         }
         self.valid = false;
+        self.cells.clear();
         if self.skip > 0 {
             self.skip -= 1;
             return false;
@@ -475,7 +490,7 @@ fn large_threshold(radius: &[Scalar], buffer: &mut Vec<Scalar>) -> Scalar {
 }
 
 /// A dense grid over the ordinary bodies, binned by counting sort.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Grid {
     origin: Vector,
     cell: Scalar,
@@ -536,6 +551,12 @@ impl Grid {
             s.fill[c] += 1;
         }
         grid
+    }
+
+    /// The widest radius two bodies may have for the grid to find them in neighbouring cells
+    /// when their spheres overlap (the argument in `build`).
+    fn fit(&self) -> Scalar {
+        self.cell / (2.0 * (1.0 + CELL_SLACK))
     }
 
     fn coords(&self, x: Vector) -> [usize; 3] {
