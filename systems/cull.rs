@@ -184,8 +184,7 @@ pub fn cull(_world: &mut World, ctx: &mut StepContext) {
             bound.clear();
             bound.extend(reach.iter().enumerate().map(|(i, &r)| widened(b, dt, i, r)));
             let (chunks, grid) = grid_pairs(b, &bound, s);
-            s.cache.rebuilt(b, bound, &s.chunks[..chunks]);
-            s.cache.cells.build(grid, &s.cell_of);
+            s.cache.rebuilt(b, bound, &s.chunks[..chunks], (grid, &s.cell_of));
         } else {
             let (chunks, _) = grid_pairs(b, &reach, s);
             for chunk in &s.chunks[..chunks] {
@@ -430,8 +429,10 @@ impl PairCache {
         true
     }
 
-    /// Keeps the grid's pairs for the widened reaches `bound`, and what they assumed.
-    fn rebuilt(&mut self, b: &Bodies, bound: Vec<Scalar>, chunks: &[Vec<(u32, u32)>]) {
+    /// Keeps the grid's pairs for the widened reaches `bound`, what they assumed, and the
+    /// grid's cells with each body's (`cell_of`) for `reanchor`.
+    fn rebuilt(&mut self, b: &Bodies, bound: Vec<Scalar>, chunks: &[Vec<(u32, u32)>], (grid, cell_of): (Grid, &[u32])) {
+        self.cells.build(grid, cell_of);
         self.pairs.clear();
         for chunk in chunks {
             self.pairs.extend_from_slice(chunk);
@@ -559,6 +560,12 @@ impl Grid {
         self.cell / (2.0 * (1.0 + CELL_SLACK))
     }
 
+    /// The cell coordinates, axis by axis, of the cell of `x` and its neighbours.
+    fn around(&self, x: Vector) -> [std::ops::RangeInclusive<usize>; 3] {
+        let c = self.coords(x);
+        [0, 1, 2].map(|k| c[k].saturating_sub(1)..=(c[k] + 1).min(self.dims[k] - 1))
+    }
+
     fn coords(&self, x: Vector) -> [usize; 3] {
         let c = ((x - self.origin) / self.cell).to_array();
         [0, 1, 2].map(|k| (c[k].floor().max(0.0) as usize).min(self.dims[k] - 1))
@@ -598,12 +605,11 @@ impl Grid {
             out.truncate(n);
             return;
         }
-        let c = self.coords(xi);
-        let range = |k: usize| c[k].saturating_sub(1)..=(c[k] + 1).min(self.dims[k] - 1);
-        for z in range(2) {
-            for y in range(1) {
+        let [xs, ys, zs] = self.around(xi);
+        for z in zs {
+            for y in ys.clone() {
                 let row = self.index([0, y, z]);
-                let (x0, x1) = (*range(0).start(), *range(0).end());
+                let (x0, x1) = (*xs.start(), *xs.end());
                 let run = start[row + x0] as usize..start[row + x1 + 1] as usize;
                 order.scan(run, (i as u32, xi, ri, fixed_i), out);
             }

@@ -81,11 +81,10 @@ impl AnchorCells {
         let Some(grid) = self.grid.filter(|_| self.cell.get(k).is_some_and(|&c| c != NONE)) else {
             return false;
         };
-        let c = grid.coords(x);
-        let range = |a: usize| c[a].saturating_sub(1)..=(c[a] + 1).min(grid.dims[a] - 1);
-        for z in range(2) {
-            for y in range(1) {
-                for x in range(0) {
+        let [xs, ys, zs] = grid.around(x);
+        for z in zs {
+            for y in ys.clone() {
+                for x in xs.clone() {
                     let mut j = self.head[grid.index([x, y, z])];
                     while j != NONE {
                         visit(j as usize);
