@@ -184,15 +184,18 @@ fn sort_from_last_order(
 /// The group of the constraints across the two sides (`SolveScratch::groups`).
 const ACROSS: u8 = 2;
 
-/// Places group `which`'s constraints in batches (`solver::place`), each batch as long as its
-/// longest manifold, and makes room for their points. `fill` writes every lane and point of
+/// Places group `which`'s constraints in batches (`solver::place`, manifolds of one point count
+/// together), each batch as long as its longest manifold, and makes room for their points. `fill` writes every lane and point of
 /// them, idle ones included, so nothing is cleared here.
 pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
     if which == ACROSS {
         // One chain up the cut: packed, not one constraint a batch (`place_packed`).
         super::place_packed(&group.slots, group.static_slot, &mut group.fill, &mut group.placed);
     } else {
-        super::place(&group.slots, group.static_slot, &mut group.last, &mut group.fill, &mut group.placed);
+        group.kinds.clear();
+        group.kinds.extend(held.iter().filter(|h| h.group == which).map(|h| h.len));
+        let scratch = (&mut group.last, &mut group.kind_of);
+        super::place((&group.slots, &group.kinds), group.static_slot, scratch, &mut group.fill, &mut group.placed);
     }
     let ConstraintGroup { batches, points, fill, placed, .. } = group;
     batches.resize(fill.len(), Batch::default());

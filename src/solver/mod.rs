@@ -257,32 +257,53 @@ impl ContactPoint {
 }
 
 /// Places constraints, given in solving order by their solver-body slots, into batches of
-/// `LANES` that share no free body: each goes to the first batch with room after the last
-/// batch holding either of its bodies (the static slot, which nothing moves, is shared
+/// `LANES` that share no free body: each goes to the first batch of its kind with room after
+/// the last batch holding either of its bodies (the static slot, which nothing moves, is shared
 /// freely). So any two constraints of one body keep their order, and the batched sweep equals
-/// the sequential one. Returns, in `out`, (batch, lane) per constraint; `fill` ends holding each
-/// batch's count. `last` is scratch, indexed by slot.
-pub fn place(slots: &[[u32; 2]], static_slot: u32, last: &mut Vec<u32>, fill: &mut Vec<u8>, out: &mut Vec<(u32, u8)>) {
+/// the sequential one whatever the kinds. A batch is as long as its longest manifold, so
+/// `kinds` (each constraint's point count) keeps like manifolds together: a resting pile's
+/// one- and two-point manifolds no longer wait through idle rows beside four-point ones. With
+/// one kind this is plain first fit. Returns, in `out`, (batch, lane) per constraint; `fill`
+/// ends holding each batch's count. `last` and `kind_of` are scratch (by slot, by batch).
+pub fn place(
+    (slots, kinds): (&[[u32; 2]], &[u8]),
+    static_slot: u32,
+    (last, kind_of): (&mut Vec<u32>, &mut Vec<u8>),
+    fill: &mut Vec<u8>,
+    out: &mut Vec<(u32, u8)>,
+) {
+    debug_assert_eq!(slots.len(), kinds.len());
     last.clear();
     last.resize(static_slot as usize + 1, 0);
     fill.clear();
     out.clear();
-    let mut first_open = 0;
-    for s in slots {
+    // Each batch's kind while it has room, `FULL` after: one comparison finds a batch to take.
+    const FULL: u8 = u8::MAX;
+    let open = kind_of;
+    open.clear();
+    // Per kind, the first batch that may still take one of its constraints.
+    let mut first_open = [0_usize; 256];
+    for (s, &kind) in slots.iter().zip(kinds) {
+        let kind = kind.min(FULL - 1);
         // Batches are numbered from 1 in `last`, so 0 means "none yet".
         let after = s.iter().filter(|&&i| i != static_slot).map(|&i| last[i as usize]).max().unwrap_or(0);
-        while first_open < fill.len() && usize::from(fill[first_open]) == LANES {
-            first_open += 1;
+        let first = &mut first_open[usize::from(kind)];
+        while *first < open.len() && open[*first] != kind {
+            *first += 1;
         }
-        let mut j = (after as usize).max(first_open);
-        while j < fill.len() && usize::from(fill[j]) == LANES {
+        let mut j = (after as usize).max(*first);
+        while j < open.len() && open[j] != kind {
             j += 1;
         }
-        if j == fill.len() {
+        if j == open.len() {
             fill.push(0);
+            open.push(kind);
         }
         out.push((j as u32, fill[j]));
         fill[j] += 1;
+        if usize::from(fill[j]) == LANES {
+            open[j] = FULL;
+        }
         for &i in s.iter().filter(|&&i| i != static_slot) {
             last[i as usize] = j as u32 + 1;
         }
@@ -363,8 +384,8 @@ mod tests {
         // Slot 9 is static. A chain 0-1, 1-2, 2-3 must go to three batches in order; 4-5 and the
         // ground contacts fill the lanes beside them.
         let slots = [[0, 1], [1, 2], [2, 3], [4, 5], [0, 9], [9, 6], [9, 7], [9, 8], [6, 7]];
-        let (mut last, mut fill, mut out) = (Vec::new(), Vec::new(), Vec::new());
-        place(&slots, 9, &mut last, &mut fill, &mut out);
+        let (mut last, mut kinds, mut fill, mut out) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        place((&slots, &[4; 9]), 9, (&mut last, &mut kinds), &mut fill, &mut out);
         assert_eq!(out, [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1), (0, 2), (0, 3), (1, 2), (1, 3)]);
         assert_eq!(fill, [4, 4, 1]);
         for (i, si) in slots.iter().enumerate() {
@@ -374,6 +395,42 @@ mod tests {
                     assert!(out[i].0 < out[j].0, "{si:?} before {sj:?}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn placement_by_kind_keeps_like_with_like_and_each_bodys_order() {
+        // Ground contacts of one and four points alternate: each kind fills its own batch.
+        let slots = [[0, 9], [1, 9], [2, 9], [3, 9], [4, 9], [5, 9]];
+        let (mut last, mut kind_of, mut fill, mut out) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        place((&slots, &[1, 4, 1, 4, 1, 4]), 9, (&mut last, &mut kind_of), &mut fill, &mut out);
+        assert_eq!(out, [(0, 0), (1, 0), (0, 1), (1, 1), (0, 2), (1, 2)]);
+        assert_eq!(fill, [3, 3]);
+        // Random piles: one kind a batch, no body twice in a batch, each body's order kept.
+        let mut rng = crate::rng::SplitMix64::new(3);
+        for _ in 0..200 {
+            let n = 1 + (rng.uniform(0.0, 60.0) as usize);
+            let body = |rng: &mut crate::rng::SplitMix64| (rng.uniform(0.0, 13.0) as u32).min(12);
+            let slots: Vec<[u32; 2]> =
+                (0..n).map(|_| [body(&mut rng), body(&mut rng)]).filter(|s| s[0] != s[1]).collect();
+            let kinds: Vec<u8> = slots.iter().map(|_| 1 + rng.uniform(0.0, 4.0) as u8).collect();
+            place((&slots, &kinds), 12, (&mut last, &mut kind_of), &mut fill, &mut out);
+            let mut kind_of_batch = vec![None; fill.len()];
+            for (k, &(batch, _)) in out.iter().enumerate() {
+                let b = &mut kind_of_batch[batch as usize];
+                assert!(b.is_none_or(|x| x == kinds[k]), "batch {batch} mixes kinds");
+                *b = Some(kinds[k]);
+            }
+            for (i, si) in slots.iter().enumerate() {
+                for (j, sj) in slots.iter().enumerate().skip(i + 1) {
+                    if si.iter().any(|x| *x != 12 && sj.contains(x)) {
+                        assert!(out[i].0 < out[j].0, "{si:?} before {sj:?}");
+                    }
+                }
+            }
+            let counted: Vec<u8> =
+                (0..fill.len()).map(|b| out.iter().filter(|o| o.0 as usize == b).count() as u8).collect();
+            assert_eq!(counted, fill);
         }
     }
 

@@ -18,12 +18,17 @@ pub struct ConstraintGroup {
     pub static_slot: u32,
     /// Solver-body slots of each constraint, in the group's numbering (for `solver::place`).
     pub slots: Vec<[u32; 2]>,
+    /// Scratch of `place_group`: each constraint's point count, which `solver::place`
+    /// batches like with like.
+    pub kinds: Vec<u8>,
     /// (batch, lane) of each constraint.
     pub placed: Vec<(u32, u8)>,
     /// Constraints per batch.
     pub fill: Vec<u8>,
-    /// Scratch of `solver::place`.
+    /// Scratch of `solver::place`: each slot's last batch.
     pub last: Vec<u32>,
+    /// Scratch of `solver::place`: each batch's kind.
+    pub kind_of: Vec<u8>,
     /// Scratch of `fill`: each batch's lanes as (pair, index in `slots`).
     pub lanes: Vec<[(u32, u32); crate::solver::LANES]>,
     /// The batches of independent constraints, in solving order.
