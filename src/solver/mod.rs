@@ -275,39 +275,45 @@ pub fn place(
     debug_assert_eq!(slots.len(), kinds.len());
     last.clear();
     last.resize(static_slot as usize + 1, 0);
+    // At most one batch per constraint: sized once, so the loop pushes nothing.
     fill.clear();
+    fill.resize(slots.len(), 0);
     out.clear();
+    out.resize(slots.len(), (0, 0));
     // Each batch's kind while it has room, `FULL` after: one comparison finds a batch to take.
     const FULL: u8 = u8::MAX;
     let open = kind_of;
     open.clear();
+    open.resize(slots.len(), FULL);
+    let mut batches = 0;
     // Per kind, the first batch that may still take one of its constraints.
     let mut first_open = [0_usize; 256];
-    for (s, &kind) in slots.iter().zip(kinds) {
+    for ((&[p, q], &kind), out) in slots.iter().zip(kinds).zip(out.iter_mut()) {
         let kind = kind.min(FULL - 1);
-        // Batches are numbered from 1 in `last`, so 0 means "none yet".
-        let after = s.iter().filter(|&&i| i != static_slot).map(|&i| last[i as usize]).max().unwrap_or(0);
+        // Batches are numbered from 1 in `last`, so 0 means "none yet"; the static slot's
+        // stays 0 (it is shared freely).
+        let after = last[p as usize].max(last[q as usize]) as usize;
         let first = &mut first_open[usize::from(kind)];
-        while *first < open.len() && open[*first] != kind {
+        while *first < batches && open[*first] != kind {
             *first += 1;
         }
-        let mut j = (after as usize).max(*first);
-        while j < open.len() && open[j] != kind {
+        let mut j = after.max(*first);
+        while j < batches && open[j] != kind {
             j += 1;
         }
-        if j == open.len() {
-            fill.push(0);
-            open.push(kind);
+        if j == batches {
+            open[j] = kind;
+            batches += 1;
         }
-        out.push((j as u32, fill[j]));
+        *out = (j as u32, fill[j]);
         fill[j] += 1;
         if usize::from(fill[j]) == LANES {
             open[j] = FULL;
         }
-        for &i in s.iter().filter(|&&i| i != static_slot) {
-            last[i as usize] = j as u32 + 1;
-        }
+        (last[p as usize], last[q as usize]) = (j as u32 + 1, j as u32 + 1);
+        last[static_slot as usize] = 0;
     }
+    fill.truncate(batches);
 }
 
 /// Places constraints like `place`, but each in the first batch with room that holds neither
