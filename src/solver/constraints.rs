@@ -185,8 +185,8 @@ fn sort_from_last_order(
 const ACROSS: u8 = 2;
 
 /// Places group `which`'s constraints in batches (`solver::place`, manifolds of one point count
-/// together), each batch as long as its longest manifold, and makes room for their points. `fill` writes every lane and point of
-/// them, idle ones included, so nothing is cleared here.
+/// together), each batch as long as its longest manifold, and makes room for their points.
+/// `fill` writes every lane and point of them, idle ones included, so nothing is cleared here.
 pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
     if which == ACROSS {
         // One chain up the cut: packed, not one constraint a batch (`place_packed`).
