@@ -188,24 +188,23 @@ const ACROSS: u8 = 2;
 /// together), each batch as long as its longest manifold, and makes room for their points.
 /// `fill` writes every lane and point of them, idle ones included, so nothing is cleared here.
 pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
+    group.kinds.clear();
+    group.kinds.extend(held.iter().filter(|h| h.group == which).map(|h| h.len));
     if which == ACROSS {
         // One chain up the cut: packed, not one constraint a batch (`place_packed`).
         super::place_packed(&group.slots, group.static_slot, &mut group.fill, &mut group.placed);
     } else {
-        group.kinds.clear();
-        group.kinds.extend(held.iter().filter(|h| h.group == which).map(|h| h.len));
         let scratch = (&mut group.last, &mut group.kind_of);
         super::place((&group.slots, &group.kinds), group.static_slot, scratch, &mut group.fill, &mut group.placed);
     }
-    let ConstraintGroup { batches, points, fill, placed, .. } = group;
+    let ConstraintGroup { batches, points, fill, placed, kinds, .. } = group;
     batches.resize(fill.len(), Batch::default());
     for batch in batches.iter_mut() {
         batch.len = 0;
     }
-    let mine = held.iter().filter(|h| h.group == which).zip(placed.iter());
-    for (held, &(batch, _)) in mine {
+    for (&len, &(batch, _)) in kinds.iter().zip(placed.iter()) {
         let batch = &mut batches[batch as usize];
-        batch.len = batch.len.max(u32::from(held.len));
+        batch.len = batch.len.max(u32::from(len));
     }
     let mut first = 0;
     for batch in batches.iter_mut() {

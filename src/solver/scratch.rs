@@ -19,7 +19,7 @@ pub struct ConstraintGroup {
     /// Solver-body slots of each constraint, in the group's numbering (for `solver::place`).
     pub slots: Vec<[u32; 2]>,
     /// Scratch of `place_group`: each constraint's point count, which `solver::place`
-    /// batches like with like.
+    /// batches like with like and which sets each batch's length.
     pub kinds: Vec<u8>,
     /// (batch, lane) of each constraint.
     pub placed: Vec<(u32, u8)>,
@@ -27,7 +27,7 @@ pub struct ConstraintGroup {
     pub fill: Vec<u8>,
     /// Scratch of `solver::place`: each slot's last batch.
     pub last: Vec<u32>,
-    /// Scratch of `solver::place`: each batch's kind.
+    /// Scratch of `solver::place`: each batch's kind while it has room.
     pub kind_of: Vec<u8>,
     /// Scratch of `fill`: each batch's lanes as (pair, index in `slots`).
     pub lanes: Vec<[(u32, u32); crate::solver::LANES]>,
