@@ -935,8 +935,12 @@ function setField(id, value, enabled) {
   input.disabled = !enabled;
 }
 
-// Selects actor `name` (null: none) and fills the fields from /api/state.
+// Selects actor `name` (null: none) and fills the fields from /api/state. The name is shown
+// with its fields, once they have arrived: never beside the last actor's.
 async function select(name) {
+  const a = name && (await fetch('/api/state').then((r) => r.json())).actors.find((x) => x.name === name);
+  // Gone with a new scene: nothing is selected.
+  if (name && !a) return select(null);
   selected = name;
   $('actor-name').textContent = name ?? 'none';
   $('actor-apply').disabled = !name;
@@ -944,10 +948,6 @@ async function select(name) {
     for (const f of fields) setField(`actor-${f}`, '', false);
     return null;
   }
-  const s = await fetch('/api/state').then((r) => r.json());
-  const a = s.actors.find((x) => x.name === name);
-  // Gone with a new scene: nothing is selected.
-  if (!a) return select(null);
   setField('actor-mass', String(a.mass), !a.fixed);
   setField('actor-restitution', String(a.restitution), true);
   setField('actor-friction', String(a.friction), true);
