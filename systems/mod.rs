@@ -49,7 +49,7 @@ pub use solve::solve;
 pub use vertex::{vertex, vertex_contact};
 
 use crate::error::ScheduleError;
-use crate::sim::schedule::{Schedule, System};
+use crate::sim::schedule::{Schedule, System, SystemFn};
 
 /// Every shipped system, by name. `find` looks them up; a scene's `schedule` and the CLI's
 /// `--schedule` name them.
@@ -68,6 +68,18 @@ pub const REGISTRY: &[System] = &[
     System { name: "ccd", run: ccd },
     System { name: "integrate", run: integrate },
 ];
+
+/// The shipped systems that never write `ctx.bodies` (they read the bodies and write pairs,
+/// posed meshes and their own scratch).
+const LEAVE_BODIES: [SystemFn; 6] = [cull, cull_all_pairs, prune, face, vertex, edge];
+
+/// True when `run` is one of `LEAVE_BODIES`: the NaN guard need not look at the bodies again
+/// after it. Two functions share an address only if their code is the same, so a custom
+/// system taken for one of these leaves the bodies too; a copy of one not recognised is
+/// merely checked.
+pub(crate) fn leaves_bodies(run: SystemFn) -> bool {
+    LEAVE_BODIES.iter().any(|&f| std::ptr::fn_addr_eq(f, run))
+}
 
 /// The default order (see the module docs).
 pub const DEFAULT_ORDER: &[&str] =
