@@ -58,11 +58,13 @@ fn drop_jointed(ctx: &mut StepContext) {
 /// distance (`Params::speculative_distance`; zero without gravity and friction, so the paper's
 /// frictionless scenes see the paper's spheres); and `CullScratch::bounds`.
 fn reach(ctx: &mut StepContext) {
-    let (b, params, dt) = (&ctx.bodies, &ctx.params, ctx.dt);
+    let mut reach = std::mem::take(&mut ctx.scratch.get_mut::<CullScratch>().reach);
+    ctx.speculative_distances(&mut reach);
+    let (b, params) = (&ctx.bodies, &ctx.params);
     let s = ctx.scratch.get_mut::<CullScratch>();
-    params.speculative_distances(dt, b, &mut s.reach);
-    s.bounds.fill(b, &ctx.meshes, params.contact_margin, &s.reach);
-    s.reach.iter_mut().zip(&b.radius).for_each(|(r, radius)| *r += radius);
+    s.bounds.fill(b, &ctx.meshes, params.contact_margin, &reach);
+    reach.iter_mut().zip(&b.radius).for_each(|(r, radius)| *r += radius);
+    s.reach = reach;
 }
 
 /// Each body's world box, widened so that two boxes apart prove a pair farther apart than any

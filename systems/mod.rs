@@ -70,16 +70,8 @@ pub const REGISTRY: &[System] = &[
 ];
 
 /// The shipped systems that never write `ctx.bodies` (they read the bodies and write pairs,
-/// posed meshes and their own scratch).
+/// posed meshes and their own scratch): `Schedule::leave_bodies`.
 const LEAVE_BODIES: [SystemFn; 6] = [cull, cull_all_pairs, prune, face, vertex, edge];
-
-/// True when `run` is one of `LEAVE_BODIES`: the NaN guard need not look at the bodies again
-/// after it. Two functions share an address only if their code is the same, so a custom
-/// system taken for one of these leaves the bodies too; a copy of one not recognised is
-/// merely checked.
-pub(crate) fn leaves_bodies(run: SystemFn) -> bool {
-    LEAVE_BODIES.iter().any(|&f| std::ptr::fn_addr_eq(f, run))
-}
 
 /// The default order (see the module docs).
 pub const DEFAULT_ORDER: &[&str] =
@@ -96,7 +88,9 @@ pub fn find(name: &str) -> Result<System, ScheduleError> {
 /// A schedule of shipped systems in the given order.
 pub fn schedule_of<S: AsRef<str>>(names: &[S]) -> Result<Schedule, ScheduleError> {
     let systems = names.iter().map(|n| find(n.as_ref())).collect::<Result<Vec<_>, _>>()?;
-    Schedule::new(systems)
+    let mut schedule = Schedule::new(systems)?;
+    schedule.leave_bodies(&LEAVE_BODIES);
+    Ok(schedule)
 }
 
 /// The default schedule: `cull, prune, face, vertex, edge, gravity, resolve, solve, correct,

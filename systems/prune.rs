@@ -213,7 +213,7 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let mut speculative = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().speculative);
     let mut touching = std::mem::take(&mut ctx.scratch.get_mut::<PruneScratch>().touching);
     let step = ctx.step;
-    ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut speculative);
+    ctx.speculative_distances(&mut speculative);
     // Resting pairs of small meshes that keep their points skip the proofs too (`recycled_state`),
     // in the same pass as the box pairs' proofs.
     let judged = judge_recycling(ctx);
@@ -438,8 +438,7 @@ const RETEST_EVERY: u64 = 8;
 /// `prune`'s reused buffers and the one thing it remembers from step to step.
 #[derive(Default)]
 struct PruneScratch {
-    /// Each body's speculative distance (`Params::speculative_distances`), found afresh each
-    /// step.
+    /// Each body's speculative distance this step (`StepContext::speculative_distances`).
     speculative: Vec<Scalar>,
     /// The pairs with a many-faced body not proved apart last step, sorted (with nothing
     /// beside them: a per-pair list `cache_entries` merges with the pairs).

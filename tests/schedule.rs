@@ -134,3 +134,35 @@ fn the_nan_guard_names_a_user_system_among_those_it_need_not_check() {
         assert_eq!((err.system.as_str(), err.step, err.field), ("poison", 1, "velocity"), "after {after}");
     }
 }
+
+/// A user system that doubles every velocity: the bodies change between `cull` and `prune`.
+fn double(_world: &mut hecs::World, ctx: &mut StepContext) {
+    ctx.bodies.velocity.iter_mut().for_each(|v| *v *= 2.0);
+}
+
+/// Runs of `shared_speculative` and how many of them saw a body with a speculative distance.
+static SHARED: [std::sync::atomic::AtomicUsize; 2] = [const { std::sync::atomic::AtomicUsize::new(0) }; 2];
+
+/// A user system: the speculative distances the step shares between systems are those of the
+/// bodies as they are now.
+fn shared_speculative(_world: &mut hecs::World, ctx: &mut StepContext) {
+    let (mut shared, mut direct) = (Vec::new(), Vec::new());
+    ctx.speculative_distances(&mut shared);
+    ctx.params.speculative_distances(ctx.dt, &ctx.bodies, &mut direct);
+    assert_eq!(shared, direct, "step {}", ctx.step);
+    SHARED[0].fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    SHARED[1].fetch_add(usize::from(direct.iter().any(|&d| d > 0.0)), std::sync::atomic::Ordering::SeqCst);
+}
+
+#[test]
+fn speculative_distances_are_worked_out_again_after_a_user_system_moves_the_bodies() {
+    // `cull` works them out and `prune` reuses them; `double` between changes every speed.
+    let mut sim = sim_of("box-drop.ron", |_| {});
+    sim.schedule.insert_after("cull", System { name: "double", run: double }).expect("cull exists");
+    sim.schedule.insert_after("double", System { name: "check", run: shared_speculative }).expect("added");
+    sim.schedule.insert_after("prune", System { name: "check again", run: shared_speculative }).expect("exists");
+    sim.run(20).expect("finite");
+    let [runs, moving] = [0, 1].map(|k| SHARED[k].load(std::sync::atomic::Ordering::SeqCst));
+    assert_eq!(runs, 40);
+    assert!(moving >= 30, "the falling box has a speculative distance: {moving} of {runs}");
+}

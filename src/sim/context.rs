@@ -157,6 +157,14 @@ impl std::fmt::Debug for Scratch {
     }
 }
 
+/// `StepContext::speculative_distances` as last worked out, and whether the bodies are still
+/// those it was worked out from.
+#[derive(Debug, Default)]
+struct Speculative {
+    fresh: bool,
+    values: Vec<Scalar>,
+}
+
 /// Everything a system may read or write besides the world (ARCHITECTURE.md).
 #[derive(Debug, Default)]
 pub struct StepContext {
@@ -203,10 +211,29 @@ impl StepContext {
         self.bodies.store(world);
     }
 
+    /// Each body's speculative distance (`Params::speculative_distances`) into `out`, worked
+    /// out once for the systems between two that may move the bodies: `cull` and `prune` read
+    /// the same. The schedule marks it stale after every other system (`bodies_changed`).
+    pub fn speculative_distances(&mut self, out: &mut Vec<Scalar>) {
+        let kept = self.scratch.get_mut::<Speculative>();
+        if !kept.fresh {
+            self.params.speculative_distances(self.dt, &self.bodies, &mut kept.values);
+            kept.fresh = true;
+        }
+        out.clone_from(&kept.values);
+    }
+
+    /// Forgets what was worked out from the bodies (`speculative_distances`): after `reload`,
+    /// and after each system that may have written them.
+    pub fn bodies_changed(&mut self) {
+        self.scratch.get_mut::<Speculative>().fresh = false;
+    }
+
     /// Re-reads the world after a custom system edited it directly: `bodies` is what every
     /// later system reads and what the step stores at its end, so an edit of the world
     /// without it is overwritten.
     pub fn reload(&mut self, world: &World) {
+        self.bodies_changed();
         let before = self.bodies.len();
         self.bodies.load(world);
         self.sleep.apply(&mut self.bodies);

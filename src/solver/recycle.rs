@@ -68,19 +68,22 @@ pub fn recycle_four(
     // `solve::relative`: B's centre in A's frame, B's orientation relative to A's.
     let offset = ra.transpose_mul(pb.sub(pa));
     let turn = Q::gather(|l| b.orientation[ia[l]]).inverse_mul(&Q::gather(|l| b.orientation[ib[l]]));
-    // `solve::still`'s quick bound (`acos_bound`), and where it fails the exact arc.
+    // `solve::still`'s bounds (`acos_bounds`), and between them the exact arc.
     let moved = offset.sub(V::gather(|l| old[l].offset));
     let shift = moved.dot(moved).sqrt();
     let c = turn.dot(&Q::gather(|l| old[l].turn)).abs();
     let x = Reg::ONE - c;
-    let bound = (Reg::splat(2.0) * x).sqrt() * (Reg::ONE + x / Reg::splat(6.0)) * Reg::splat(1.0 + 1e-9);
-    let radius = Reg::new(ib.map(|i| b.radius[i]));
-    let quick = (shift + Reg::splat(2.0) * bound * radius).simd_lt(Reg::new(distance)).to_bitmask();
-    let (shift, radius) = (shift.to_array(), radius.to_array());
+    let root = (Reg::splat(2.0) * x).sqrt();
+    let (low, high) = (root * Reg::splat(1.0 - 1e-9), root * (Reg::ONE + x / Reg::splat(6.0)) * Reg::splat(1.0 + 1e-9));
+    let (radius, distance) = (Reg::new(ib.map(|i| b.radius[i])), Reg::new(distance));
+    let arc = |bound: Reg| shift + Reg::splat(2.0) * bound * radius;
+    let (quick, moved) = (arc(high).simd_lt(distance).to_bitmask(), arc(low).simd_ge(distance).to_bitmask());
+    let (shift, radius, distance) = (shift.to_array(), radius.to_array(), distance.to_array());
     let (tx, ty, tz, tw) = (turn.x.to_array(), turn.y.to_array(), turn.z.to_array(), turn.w.to_array());
     let still: [bool; LANES] = std::array::from_fn(|l| {
         let turn = crate::math::Quat::from_xyzw(tx[l], ty[l], tz[l], tw[l]);
-        quick & (1 << l) != 0 || shift[l] + turn.angle_between(old[l].turn) * radius[l] < distance[l]
+        quick & (1 << l) != 0
+            || (moved & (1 << l) == 0 && shift[l] + turn.angle_between(old[l].turn) * radius[l] < distance[l])
     });
     let normal = ra.mul(V::gather(|l| old[l].normal));
     for (l, o) in out.iter_mut().enumerate() {

@@ -230,7 +230,7 @@ pub struct SolveScratch {
     /// The solver bodies: the first side's free bodies, its static slot, the second side's,
     /// the last static slot (`solver::build_constraints`).
     pub bodies: Vec<SolverBody>,
-    /// Each actor's speculative distance this step (`Params::speculative_distances`).
+    /// Each actor's speculative distance this step (`StepContext::speculative_distances`).
     pub speculative: Vec<Scalar>,
     /// S = (I⁻¹)^½ in world axes of each solver body (zero for the static slots).
     pub scale: Vec<Mat3>,
