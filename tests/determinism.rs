@@ -41,7 +41,7 @@ fn mixed_shapes_are_bit_identical_across_thread_counts() {
 
 /// The hash of box-gas (512 cubes, 120 steps), pinned: a change that moves it must be a
 /// deliberate change of the physics, and updates this value saying why in its commit.
-const PINNED_BOX_GAS_HASH: u64 = 0xe092_b1a9_fff7_a94c;
+const PINNED_BOX_GAS_HASH: u64 = 0x454f_8833_798a_6c8d;
 
 #[test]
 fn box_gas_hash_is_pinned() {
