@@ -170,7 +170,7 @@ pub fn rotate_tensor(orientation: Quat, m: Mat3) -> Mat3 {
 
 /// True when every component `parts` gives of every item is finite. Each component times
 /// zero is zero when finite and NaN otherwise, and a sum of zeros cannot overflow, so the sums
-/// are zero exactly when all are finite. The guard runs after every system: the sums go in
+/// are zero exactly when all are finite. The guard runs after most systems: the sums go in
 /// four chains per component, independent lanes the compiler keeps in vector registers.
 fn all_finite<T, const K: usize>(items: &[T], parts: impl Fn(&T) -> [Scalar; K]) -> bool {
     let mut chains = [[0.0; K]; 4];
