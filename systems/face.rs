@@ -1,7 +1,7 @@
 //! `face`: the paper's face test. Triangle centroids of one body inside the other
 //! (docs/physics.md §1.3, errata E2 and E3).
 
-use crate::collision::contact::{Contact, Feature, PairState};
+use crate::collision::contact::{Contact, Feature, Pair, PairState};
 use crate::collision::hull::{
     Below, Flood, Hints, Kind, centre_walks, features_below, is_many_faced, outside_near_face,
 };
@@ -29,26 +29,39 @@ pub fn face(_world: &mut World, ctx: &mut StepContext) {
 /// §1.6): the (B, A) result has its normal flipped so it still points from B to A.
 /// Both ways share the walks along the line of centres (`centre_walks`).
 pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
-    let count_hits = |ctx: &mut StepContext| {
-        // Only this test reports `feature`, so this counts its hits once even when a schedule
-        // runs it twice; hits of earlier tests keep their own feature.
-        let found =
-            |p: &&crate::collision::contact::Pair| matches!(p.state, PairState::Found(c) if c.feature == feature);
-        ctx.stats.found[feature as usize] = ctx.pairs.iter().filter(found).count() as u64;
-    };
+    // Only this test reports `feature`, so its count is its hits once even when a schedule
+    // runs it twice; hits of earlier tests keep their own feature.
+    let found = |p: &Pair| matches!(p.state, PairState::Found(c) if c.feature == feature);
     // A resting scene's pairs all keep their points (`prune`): nothing to pose, walk or test.
-    if !ctx.pairs.iter().any(|p| p.is_candidate()) {
-        return count_hits(ctx);
+    if !ctx.pairs.iter().any(Pair::is_candidate) {
+        ctx.stats.found[feature as usize] = ctx.pairs.iter().filter(|p| found(p)).count() as u64;
+        return;
     }
-    ctx.pose_candidates();
+    // The candidates, and the hits so far: the one pass over all the pairs.
+    let mut candidates = std::mem::take(&mut ctx.scratch.get_mut::<CentreWalks>().candidates);
+    candidates.clear();
+    let mut hits = 0;
+    for (i, p) in ctx.pairs.iter().enumerate() {
+        match p.state {
+            PairState::Candidate => candidates.push(i as u32),
+            PairState::Found(c) => hits += u64::from(c.feature == feature),
+            _ => {}
+        }
+    }
+    let ends = candidates.iter().flat_map(|&i| [ctx.pairs[i as usize].a, ctx.pairs[i as usize].b]);
+    ctx.posed.pose(&ctx.bodies, ends);
     let mut walks = std::mem::take(ctx.scratch.get_mut::<CentreWalks>());
-    walks.update(ctx);
+    walks.update(ctx, &candidates);
     let posed = &ctx.posed;
     // Each candidate with its entry in `walks`, if that is still its own (a custom system may
     // change the pairs between the tests): a serial pass, then the tests in parallel.
     let mut entries = walks.list.iter().zip(walks.floods.iter_mut()).peekable();
-    let mut rows = Vec::new();
-    for (i, pair) in ctx.pairs.iter_mut().enumerate().filter(|(_, p)| p.is_candidate()) {
+    let mut rows = Vec::with_capacity(candidates.len());
+    let (mut rest, mut first) = (&mut ctx.pairs[..], 0);
+    for &i in &candidates {
+        let i = i as usize;
+        let (pair, after) = std::mem::take(&mut rest)[i - first..].split_first_mut().expect("a candidate's index");
+        (rest, first) = (after, i + 1);
         while entries.next_if(|(e, _)| (e.0 as usize) < i).is_some() {}
         let key = (pair.a, pair.b);
         let own = |(e, _): &(&Entry, &mut [Below; 2])| e.0 as usize == i && e.1 == key;
@@ -74,9 +87,11 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
             pair.state = PairState::Found(contact);
         }
     });
+    hits += rows.iter().filter(|(p, _)| found(p)).count() as u64;
+    ctx.stats.found[feature as usize] = hits;
     drop(rows);
+    walks.candidates = candidates;
     *ctx.scratch.get_mut::<CentreWalks>() = walks;
-    count_hits(ctx);
 }
 
 /// The step's candidate pairs as the first detection test found them, each with its
@@ -95,21 +110,25 @@ struct CentreWalks {
     list: Vec<Entry>,
     /// Each entry's floods, both ways.
     floods: Vec<[Below; 2]>,
+    /// Scratch: the indices of the pairs a test finds to be candidates.
+    candidates: Vec<u32>,
 }
 
 /// A candidate's index among the pairs, its bodies and its walks.
 type Entry = (u32, (u32, u32), Hints);
 
 impl CentreWalks {
-    fn update(&mut self, ctx: &StepContext) {
+    /// The list for the candidates (`candidates`, their indices among the pairs), unless it
+    /// was made this step for as many pairs.
+    fn update(&mut self, ctx: &StepContext, candidates: &[u32]) {
         if self.step == ctx.step && self.pairs == ctx.pairs.len() {
             return;
         }
         let posed = &ctx.posed;
         (self.step, self.pairs) = (ctx.step, ctx.pairs.len());
         self.list.clear();
-        let candidates = ctx.pairs.iter().enumerate().filter(|(_, p)| p.is_candidate());
-        self.list.extend(candidates.map(|(i, p)| (i as u32, (p.a, p.b), [None; 2])));
+        let pairs = candidates.iter().map(|&i| (i, &ctx.pairs[i as usize]));
+        self.list.extend(pairs.map(|(i, p)| (i, (p.a, p.b), [None; 2])));
         let walk = |e: &mut Entry| e.2 = centre_walks(posed.get(e.1.0), posed.get(e.1.1));
         self.list.par_iter_mut().for_each(walk);
         // The buffers stay, for the next step's floods.
