@@ -16,6 +16,7 @@ use crate::collision::posed::Posed;
 use crate::collision::toi::{Approach, impact_contact, meshes_time_of_impact};
 use crate::math::{Mat3, Scalar, Vector, exp_map};
 use crate::model::components::{ActorIndex, Pose};
+use crate::model::mass::equal_moments;
 use crate::model::mesh::{MeshId, MeshTable};
 use crate::sim::bodies::{Bodies, rotate_tensor};
 use crate::sim::context::StepContext;
@@ -341,7 +342,7 @@ fn path(b: &Bodies, s: &CcdScratch, dt: Scalar, i: usize) -> Path {
     }
     if s.flown[i] {
         let m = b.principal_moments[i];
-        let free = (!is_isotropic(m)).then_some((b.principal_axes[i], m));
+        let free = (!equal_moments(m)).then_some((b.principal_axes[i], m));
         return Path { t0: s.taken[i], pose: here, v: b.velocity[i], w: b.angular_velocity[i], free };
     }
     let start = s.start[i];
@@ -351,11 +352,6 @@ fn path(b: &Bodies, s: &CcdScratch, dt: Scalar, i: usize) -> Path {
     let turn = if turn.w < 0.0 { -turn } else { turn };
     let v = (here.position + b.velocity[i] * dt - start.position) / dt;
     Path { t0: 0.0, pose: start, v, w: turn.to_scaled_axis() / dt, free: None }
-}
-
-/// Equal principal moments: any turn leaves the inertia as it is.
-fn is_isotropic(m: Vector) -> bool {
-    m.x == m.y && m.y == m.z
 }
 
 /// Moves free body `i` along its path to time `t` of the step. On a free flight its world
@@ -370,7 +366,7 @@ fn fly(ctx: &mut StepContext, s: &mut CcdScratch, i: usize, t: Scalar) {
     if let Some((axes, moments)) = way.free {
         // The free turn's ω at its end: L and the energy kept (docs/physics.md §2.7).
         b.angular_velocity[i] = rotate_free(way.pose.orientation, way.w, axes, moments, t - way.t0).1;
-    } else if !is_isotropic(b.principal_moments[i]) {
+    } else if !equal_moments(b.principal_moments[i]) {
         // Along the step's path an unequal-moment body turns with its spin: ω kept in its own
         // frame, so its energy too. Kept in the world frame while the inertia turns, it would
         // make energy (docs/physics.md §2.7).

@@ -42,10 +42,10 @@ pub(crate) fn detect(ctx: &mut StepContext, kernel: Kernel, feature: Feature) {
     candidates.clear();
     let mut hits = 0;
     for (i, p) in ctx.pairs.iter().enumerate() {
-        match p.state {
-            PairState::Candidate => candidates.push(i as u32),
-            PairState::Found(c) => hits += u64::from(c.feature == feature),
-            _ => {}
+        if p.is_candidate() {
+            candidates.push(i as u32);
+        } else {
+            hits += u64::from(found(p));
         }
     }
     let ends = candidates.iter().flat_map(|&i| [ctx.pairs[i as usize].a, ctx.pairs[i as usize].b]);

@@ -9,6 +9,7 @@
 //! flip and drifts L (E15, E16).
 
 use crate::math::{Mat3, Quat, Scalar, Vector, exp_map};
+use crate::model::mass::equal_moments;
 use crate::sim::bodies::rotate_tensor;
 use crate::sim::context::StepContext;
 use crate::systems::CcdScratch;
@@ -41,7 +42,7 @@ const MAX_PARTS: Scalar = 16_000.0;
 /// `MAX_TURN` a step takes the splitting in as many equal parts as keep each within it.
 #[must_use]
 pub fn rotate_free(q: Quat, omega: Vector, axes: Quat, moments: Vector, dt: Scalar) -> (Quat, Vector) {
-    if moments.x == moments.y && moments.y == moments.z {
+    if equal_moments(moments) {
         return ((exp_map(omega * dt) * q).normalize(), omega);
     }
     let mut q_p = q * axes;

@@ -101,6 +101,13 @@ pub fn principal_axes(inertia: Mat3) -> (Vector, Mat3) {
 /// differ in the 16th digit.
 const ISOTROPIC_TOLERANCE: Scalar = 1e-12;
 
+/// Principal moments all equal, bit for bit (cubes, and spheres after `isotropic_to_round_off`):
+/// any turn leaves such a body's inertia as it is.
+#[must_use]
+pub fn equal_moments(m: Vector) -> bool {
+    m.x == m.y && m.y == m.z
+}
+
 /// `inertia` as the exact isotropic tensor (the mean moment on the diagonal) when its principal
 /// moments agree to round-off but not bit for bit, else unchanged. Such a body then turns by
 /// the exact isotropic rotation instead of the splitting's five (docs/physics.md §2.7), as a

@@ -412,7 +412,7 @@ fn gather_bodies(b: &Bodies, parts: BodyParts) {
     // whatever the orientation.
     let scales = |i: usize| {
         let m = b.principal_moments[i];
-        if m.x == m.y && m.y == m.z {
+        if crate::model::mass::equal_moments(m) {
             return (
                 Mat3::from_diagonal(Vector::splat(1.0 / m.x.sqrt())),
                 Mat3::from_diagonal(Vector::splat(m.x.sqrt())),
