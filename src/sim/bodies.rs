@@ -16,7 +16,8 @@ pub struct Bodies {
     pub position: Vec<Vector>,
     /// Body → world rotation.
     pub orientation: Vec<Quat>,
-    /// The same rotation as a matrix, computed once per step for the pair loops.
+    /// The same rotation as a matrix for the pair loops, kept with `orientation`: a system
+    /// that turns a body sets both, and `inv_inertia_world` (as `integrate` and `ccd` do).
     pub rotation: Vec<Mat3>,
     /// Linear velocity [m/s].
     pub velocity: Vec<Vector>,
@@ -86,16 +87,21 @@ impl Bodies {
         for (entity, index, pose, vel, mass, material, sphere, mesh) in world.query::<Row>().iter() {
             let i = index.0 as usize;
             self.entity[i] = entity;
+            // `integrate` left the rotation and world inverse inertia of the pose it stored:
+            // worked out again only where the world's orientation or inertia is not that one.
+            let same = self.orientation[i] == pose.orientation && self.inv_inertia_body[i] == mass.inv_inertia;
             self.position[i] = pose.position;
             self.orientation[i] = pose.orientation;
-            self.rotation[i] = Mat3::from_quat(pose.orientation);
             self.velocity[i] = vel.linear;
             self.angular_velocity[i] = vel.angular;
             self.inv_mass[i] = mass.inv_mass;
             self.inv_inertia_body[i] = mass.inv_inertia;
             self.principal_moments[i] = mass.principal_moments;
             self.principal_axes[i] = mass.principal_axes;
-            self.inv_inertia_world[i] = rotate_tensor(pose.orientation, mass.inv_inertia);
+            if !same {
+                self.rotation[i] = Mat3::from_quat(pose.orientation);
+                self.inv_inertia_world[i] = rotate_tensor(pose.orientation, mass.inv_inertia);
+            }
             self.radius[i] = sphere.radius;
             self.mesh[i] = mesh.id;
             self.restitution[i] = material.restitution;
@@ -216,5 +222,40 @@ mod tests {
         let mut c = b.clone();
         c.orientation[4].x = f64::INFINITY;
         assert_eq!(c.first_non_finite(), Some((4, "orientation")));
+    }
+
+    #[test]
+    fn loading_works_the_rotation_and_world_inertia_out_again_only_for_a_new_pose_or_inertia() {
+        use crate::model::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
+        use crate::model::mesh::ConvexMesh;
+        let inertia = Mat3::from_diagonal(Vector::new(1.0, 2.0, 3.0));
+        let mut world = World::new();
+        let actor = world.spawn((
+            ActorIndex(0),
+            Pose { position: Vector::ZERO, orientation: Quat::from_rotation_x(0.3) },
+            Velocity::default(),
+            MassProps::dynamic(1.0, inertia),
+            Material { restitution: 0.0, friction: 0.5 },
+            BoundingSphere { radius: 1.0 },
+            Mesh { id: MeshId(0), shape: std::sync::Arc::new(ConvexMesh::cuboid(Vector::ONE)) },
+        ));
+        let mut b = Bodies::default();
+        let fresh =
+            |b: &Bodies| (Mat3::from_quat(b.orientation[0]), rotate_tensor(b.orientation[0], b.inv_inertia_body[0]));
+        b.load(&world);
+        assert_eq!((b.rotation[0], b.inv_inertia_world[0]), fresh(&b));
+        // The same pose and inertia: what the arrays hold is kept (a stale value survives).
+        b.rotation[0] = Mat3::ZERO;
+        b.load(&world);
+        assert_eq!(b.rotation[0], Mat3::ZERO);
+        // A turn of the world's pose, then a new inertia: both worked out again.
+        world.get::<&mut Pose>(actor).unwrap().orientation = Quat::from_rotation_y(0.7);
+        b.load(&world);
+        assert_eq!((b.rotation[0], b.inv_inertia_world[0]), fresh(&b));
+        b.inv_inertia_world[0] = Mat3::ZERO;
+        *world.get::<&mut MassProps>(actor).unwrap() = MassProps::dynamic(2.0, inertia * 2.0);
+        b.load(&world);
+        assert_eq!((b.rotation[0], b.inv_inertia_world[0]), fresh(&b));
+        assert_ne!(b.inv_inertia_world[0], Mat3::ZERO);
     }
 }
