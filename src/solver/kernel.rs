@@ -9,7 +9,7 @@
 //! step (a division, a root, a block's rarer cases) and skip it when none does.
 
 use super::lanes::{Batch, LaneVectors, Lanes, PointRows};
-use super::{BodyStore, LANES, Softness};
+use super::{BodyStore, LANES, Softness, TOUCH_SHARE};
 use crate::math::Scalar;
 use wide::f64x4;
 
@@ -540,10 +540,11 @@ fn with_levers(linear: Reg, (a, b): (RegVec, RegVec), g: &[LaneVectors; 2]) -> R
     linear + a.dot(RegVec::load(&g[0])) - b.dot(RegVec::load(&g[1]))
 }
 
-/// Restitution after the substeps (Box2D v3): a point that touched and was approaching faster
-/// than `threshold` [m/s] when the step began leaves at `restitution` times that speed, by an
-/// added normal impulse (accumulated, never pulling). Slower contacts rest: they do not hop.
-/// A manifold's diagonals are solved as blocks here too, so a box landing flat leaves flat.
+/// Restitution after the substeps (Box2D v3): a point that touched (`TOUCH_SHARE`) and was
+/// approaching faster than `threshold` [m/s] when the step began leaves at `restitution` times
+/// that speed, by an added normal impulse (accumulated, never pulling). Slower contacts rest:
+/// they do not hop. A manifold's diagonals are solved as blocks here too, so a box landing flat
+/// leaves flat.
 pub fn restitution<B: BodyStore + ?Sized>(
     bodies: &mut B,
     batches: &[Batch],
@@ -560,10 +561,12 @@ pub fn restitution<B: BodyStore + ?Sized>(
         }
         let mut lane_bodies = LaneBodies::open(bodies, batch);
         let (inv_mass_sum, e_n) = (load(&batch.inv_mass_sum), load(&batch.restitution));
+        let largest = points_of(batch, points).iter().fold(Reg::ZERO, |m, p| m.max(load(&p.max_impulse)));
+        let touch = largest * Reg::splat(TOUCH_SHARE);
         // A point's bouncing lanes, and its rows there: rigid, the target the reversed approach.
         let bounce = |point: &PointRows| {
             let approach = load(&point.approach);
-            let touched = load(&point.max_impulse).simd_gt(Reg::ZERO);
+            let touched = load(&point.max_impulse).simd_gt(touch);
             let bouncing = e_n.simd_gt(Reg::ZERO) & approach.simd_le(Reg::splat(-threshold)) & touched;
             (bouncing, NormalRows::rigid(point, e_n * approach))
         };

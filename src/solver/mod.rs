@@ -140,6 +140,12 @@ impl BodyStore for Sides<'_> {
 /// Constraints solved side by side in a batch.
 pub const LANES: usize = 4;
 
+/// Share of its manifold's largest impulse in the substeps above which a point counts as having
+/// touched, and may bounce (`kernel::restitution`): far above the round-off a block solve
+/// leaves on a point it did not push (1e-15 of the others' impulses, on a cube landing flat,
+/// whose lone corner then bounced and set it spinning), far below any share it really carried.
+pub const TOUCH_SHARE: Scalar = 1e-9;
+
 /// One held pair: its bodies, normal, material and friction rows.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Constraint {

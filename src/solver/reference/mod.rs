@@ -9,7 +9,7 @@
 //! constraint alone, must agree with this bit for bit; the tests below check it on random
 //! constraints laid out in batches by the solver's own `place`.
 
-use super::{Constraint, ContactPoint, Softness, SolverBody};
+use super::{Constraint, ContactPoint, Softness, SolverBody, TOUCH_SHARE};
 use crate::math::{Scalar, Vector};
 
 /// One held pair: its constraint and its manifold's points, in order.
@@ -301,7 +301,8 @@ fn friction(e: &mut Ends, c: &mut Constraint, points: &[ContactPoint]) {
 pub(super) fn restitution(bodies: &mut [SolverBody], pairs: &mut [PairRows], threshold: Scalar) {
     for PairRows { constraint: c, points } in pairs {
         let e_n = c.restitution;
-        let bounces = |p: &ContactPoint| e_n > 0.0 && p.approach <= -threshold && p.max_impulse > 0.0;
+        let touch = points.iter().fold(0.0, |m, p| max(m, p.max_impulse)) * TOUCH_SHARE;
+        let bounces = |p: &ContactPoint| e_n > 0.0 && p.approach <= -threshold && p.max_impulse > touch;
         if !points.iter().any(bounces) {
             continue;
         }

@@ -432,3 +432,41 @@ fn a_box_landing_flat_on_two_corners_stops_without_spin() {
         assert_eq!((b.v, b.w), (Vector::ZERO, Vector::ZERO));
     }
 }
+
+/// A body (mass 1, S = identity) at rest on the static slot at four corners r = (±1, −1, ±1),
+/// paired as a manifold's diagonals, each as `corners` gives (approach [m/s], impulse held
+/// [N·s], also its largest); restitution 1. Returns the body's (v, ŵ) and the impulses after
+/// the restitution pass, from both solvers.
+fn bounce_four_corners(corners: [(Scalar, Scalar); 4]) -> [(SolverBody, Vec<Scalar>); 2] {
+    let n = Vector::Y;
+    let corner = |(x, z): (Scalar, Scalar), (approach, impulse): (Scalar, Scalar)| {
+        let g = [Vector::new(x, -1.0, z).cross(n), Vector::ZERO];
+        let k = 1.0 + g[0].length_squared();
+        ContactPoint { g, mass: 1.0 / k, k, impulse, max_impulse: impulse, approach, ..ContactPoint::IDLE }
+    };
+    let at = [(1.0, 1.0), (-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0)];
+    let mut points: Vec<ContactPoint> = at.iter().zip(corners).map(|(&r, c)| corner(r, c)).collect();
+    couple_pairs(&mut points, [1.0, 0.0], Softness::new(0.01).compliance);
+    let constraint = Constraint { slot: [0, 1], inv_mass: [1.0, 0.0], restitution: 1.0, ..Constraint::idle(1) };
+    let pairs = [PairRows { constraint, points }];
+    let bodies = [SolverBody::default(); 2];
+    let (mut kb, mut rb, mut reference_pairs) = (bodies.to_vec(), bodies.to_vec(), pairs.to_vec());
+    let mut group = lay_out(&pairs, 1);
+    run(Step::Restitution, (&mut kb, &mut group), (&mut rb, &mut reference_pairs), (0.01, 1.0, true));
+    let kernel_impulses = (0..4).map(|j| group.points[j].impulse[0]).collect();
+    let reference_impulses = reference_pairs[0].points.iter().map(|p| p.impulse).collect();
+    [(kb[0], kernel_impulses), (rb[0], reference_impulses)]
+}
+
+#[test]
+fn a_corner_whose_share_of_the_stop_was_round_off_does_not_bounce() {
+    // Flat on four corners that all approached at 2 m/s; the stop fell on the diagonal (2, 3),
+    // corner 1 carried round-off. Only that diagonal bounces: K = [[3, −1], [−1, 3]] takes
+    // (1, 1) N·s more to leave at 2 m/s, v_y = 2 and no spin. Counted as touched, corner 1
+    // bounced alone first and set the body spinning.
+    let corners = [(-2.0, 0.0), (-2.0, 1e-15), (-2.0, 0.5), (-2.0, 0.5)];
+    for (b, impulses) in bounce_four_corners(corners) {
+        assert_eq!((b.v, b.w), (Vector::new(0.0, 2.0, 0.0), Vector::ZERO));
+        assert_eq!(impulses, [0.0, 1e-15, 1.5, 1.5]);
+    }
+}
