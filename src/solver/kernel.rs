@@ -556,12 +556,13 @@ pub fn restitution<B: BodyStore + ?Sized>(
         // are left as they are without loading them.
         let may_bounce =
             |point: &PointRows| (0..LANES).any(|l| batch.restitution[l] > 0.0 && point.approach[l] <= -threshold);
-        if !points_of(batch, points).iter().any(may_bounce) {
+        let batch_points = points_of(batch, points);
+        if !batch_points.iter().any(may_bounce) {
             continue;
         }
         let mut lane_bodies = LaneBodies::open(bodies, batch);
         let (inv_mass_sum, e_n) = (load(&batch.inv_mass_sum), load(&batch.restitution));
-        let largest = points_of(batch, points).iter().fold(Reg::ZERO, |m, p| m.max(load(&p.max_impulse)));
+        let largest = batch_points.iter().fold(Reg::ZERO, |m, p| m.max(load(&p.max_impulse)));
         let touch = largest * Reg::splat(TOUCH_SHARE);
         // A point's bouncing lanes, and its rows there: rigid, the target the reversed approach.
         let bounce = |point: &PointRows| {
@@ -570,7 +571,7 @@ pub fn restitution<B: BodyStore + ?Sized>(
             let bouncing = e_n.simd_gt(Reg::ZERO) & approach.simd_le(Reg::splat(-threshold)) & touched;
             (bouncing, NormalRows::rigid(point, e_n * approach))
         };
-        for pair in points_of(batch, points).chunks_mut(2) {
+        for pair in batch_points.chunks_mut(2) {
             match pair {
                 [p, q] => {
                     let ((bp, rp), (bq, rq)) = (bounce(p), bounce(q));
