@@ -325,21 +325,23 @@ fn substeps(ctx: &mut StepContext, joints: &mut Joints) {
     plan.extend(substep_plan(count, |k| params.sweeps(k), (h, soft), params.gravity * h, repeat));
     plan.push(Step::Pass(Pass::Restitution(params.restitution_threshold(dt))));
     drive(s, &plan, h, joints);
-    // Worked out in parallel (a rotation each), then written in place.
-    let (b, left) = (&ctx.bodies, s.left);
-    let after = |(k, &i): (usize, &u32)| {
-        let (i, slot) = (i as usize, if k < left { k } else { k + 1 });
-        let (body, scale) = (&s.bodies[slot], s.scale[slot]);
-        let w = scale * body.w;
-        let turn = exp_map(scale * body.dq - w * dt);
-        (body.v, w, b.position[i] + (body.dx - body.v * dt), (turn * b.orientation[i]).normalize())
-    };
-    s.moving.par_iter().enumerate().map(after).collect_into_vec(&mut s.after);
+    // Written in place, body by body in parallel: a body is held here if its solver slot's
+    // moving body is itself (a fixed, untouched or sleeping body's slot is a static one or stale).
+    let (moving, slots, solver_bodies, scales, left) = (&s.moving, &s.slot, &s.bodies, &s.scale, s.left);
     let b = &mut ctx.bodies;
-    for (&i, &(v, w, x, q)) in s.moving.iter().zip(&s.after) {
-        let i = i as usize;
-        (b.velocity[i], b.angular_velocity[i], b.position[i], b.orientation[i]) = (v, w, x, q);
-    }
+    let poses = b.position.par_iter_mut().zip(b.orientation.par_iter_mut());
+    let rows = b.velocity.par_iter_mut().zip(b.angular_velocity.par_iter_mut()).zip(poses).zip(slots.par_iter());
+    rows.enumerate().for_each(|(i, (((v, w), (x, q)), &slot))| {
+        let slot = slot as usize;
+        let k = if slot < left { slot } else { slot.wrapping_sub(1) };
+        if moving.get(k) != Some(&(i as u32)) {
+            return;
+        }
+        let (body, scale) = (&solver_bodies[slot], scales[slot]);
+        let spin = scale * body.w;
+        let turn = exp_map(scale * body.dq - spin * dt);
+        (*v, *w, *x, *q) = (body.v, spin, *x + (body.dx - body.v * dt), (turn * *q).normalize());
+    });
     for &i in &s.moving {
         ctx.posed.mark_moved(i as usize);
     }
@@ -379,7 +381,8 @@ fn remember(ctx: &mut StepContext) {
             (to.on_a, to.on_b) = (*on_a, *on_b);
         }
         let group = &groups[usize::from(held.group)];
-        let (batch, lane) = (&group.batches[held.batch as usize], usize::from(held.lane));
+        let (batch, lane) = group.placed[held.at as usize];
+        let (batch, lane) = (&group.batches[batch as usize], usize::from(lane));
         let [n, t1, t2] = batch.axes(lane);
         let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
         (out.tangent, out.twist) = (t1 * j1 + t2 * j2, n * jw);

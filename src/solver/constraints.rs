@@ -73,8 +73,8 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         let g = &mut s.groups[group];
         let local = |i: u32| if i == left || i == last { g.static_slot } else { i - g.offset };
         let slot = [local(slot[0]), local(slot[1])];
+        s.held.push(HeldPair { pair: k, group: group as u8, at: g.slots.len() as u32, len: ends.len as u8 });
         g.slots.push(slot);
-        s.held.push(HeldPair { pair: k, group: group as u8, batch: 0, lane: 0, len: ends.len as u8 });
     }
     // The two sides' groups placed and filled at once (they write disjoint batches), the third
     // by whichever thread is free first.
@@ -100,13 +100,6 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         fill(&shared, which, group);
     };
     rayon::join(|| build(0, first), || rayon::join(|| build(1, second), || build(2, across)));
-    // Each held pair's batch and lane, for `solve::remember`.
-    let mut next = [0_usize; 3];
-    for held in held.iter_mut() {
-        let g = usize::from(held.group);
-        (held.batch, held.lane) = groups[g].placed[next[g]];
-        next[g] += 1;
-    }
 }
 
 /// Last step's solving order, as `sort_from_last_order` reads it.

@@ -44,10 +44,8 @@ pub struct HeldPair {
     pub pair: u32,
     /// Its group (`SolveScratch::groups`).
     pub group: u8,
-    /// Its batch in the group.
-    pub batch: u32,
-    /// Lane within the batch.
-    pub lane: u8,
+    /// Its place among the group's constraints: its (batch, lane) is the group's `placed[at]`.
+    pub at: u32,
     /// Points (1 to 4).
     pub len: u8,
 }
@@ -212,9 +210,6 @@ pub struct SolveScratch {
     /// Both sides' constraints are in the first group, numbered across both sides (one thread
     /// solves them; `build_constraints`).
     pub merged: bool,
-    /// Scratch: each moving body's velocity, angular velocity, position and orientation after
-    /// the substeps, found in parallel and then written to the bodies.
-    pub after: Vec<(Vector, Vector, Vector, Quat)>,
     /// Scratch: each free body's coordinate along the split, with its actor index.
     pub keys: Vec<(u64, u32)>,
     /// Scratch of the solving order's sort: the held pairs by their place in last step's order.

@@ -16,7 +16,7 @@ fn lay_out(pairs: &[PairRows], static_slot: u32) -> ConstraintGroup {
     let mut group = ConstraintGroup { static_slot, ..ConstraintGroup::default() };
     group.slots.extend(pairs.iter().map(|p| p.constraint.slot));
     let held: Vec<HeldPair> =
-        pairs.iter().map(|p| HeldPair { pair: 0, group: 0, batch: 0, lane: 0, len: p.points.len() as u8 }).collect();
+        pairs.iter().map(|p| HeldPair { pair: 0, group: 0, at: 0, len: p.points.len() as u8 }).collect();
     place_group(&held, 0, &mut group);
     make_idle(&held, 0, &mut group);
     for (pair, &(batch, lane)) in pairs.iter().zip(&group.placed) {
