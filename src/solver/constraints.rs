@@ -255,7 +255,7 @@ struct Shared<'a> {
 /// idle lanes and points.
 fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     let (b, params, dt) = (sh.bodies, sh.params, sh.dt);
-    let ConstraintGroup { slots, placed, batches, points, fill: counts, static_slot, lanes, .. } = group;
+    let ConstraintGroup { slots, placed, batches, points, fill: counts, static_slot, lanes, bouncing, .. } = group;
     // Each batch's lanes: (pair, index in the group).
     lanes.clear();
     lanes.resize(batches.len(), [(0, 0); LANES]);
@@ -267,8 +267,10 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     // before integrating forces).
     let before = |i: usize| b.velocity[i] - if b.is_fixed(i) { Vector::ZERO } else { params.gravity * dt };
     let compliance = super::Softness::new(params.substep(dt)).compliance;
+    let threshold = params.restitution_threshold(dt);
+    bouncing.clear();
     let mut input = LaneInputs::default();
-    for ((batch, &count), lanes) in batches.iter_mut().zip(counts.iter()).zip(lanes.iter()) {
+    for (at, ((batch, &count), lanes)) in batches.iter_mut().zip(counts.iter()).zip(lanes.iter()).enumerate() {
         let count = usize::from(count);
         let rows = &mut points[batch.first as usize..(batch.first + batch.len) as usize];
         // An idle lane repeats lane 0 (`LaneInputs`).
@@ -325,6 +327,9 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
             input.twist_impulse.set(l, jw);
         }
         super::fill::fill_lanes(&input, count, *static_slot, compliance, batch, rows);
+        if super::may_bounce(batch, rows, threshold) {
+            bouncing.push(at as u32);
+        }
     }
 }
 

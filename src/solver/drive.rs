@@ -69,7 +69,9 @@ fn run<B: BodyStore + ?Sized>(pass: Pass, bodies: &mut B, group: &mut Constraint
         Pass::Warm => super::warm_start(bodies, &group.batches, &mut group.points),
         Pass::Solve(soft) => super::sweep(bodies, &mut group.batches, &mut group.points, h, Some(soft), fresh),
         Pass::Relax => super::sweep(bodies, &mut group.batches, &mut group.points, h, None, fresh),
-        Pass::Restitution(threshold) => super::restitution(bodies, &group.batches, &mut group.points, threshold),
+        Pass::Restitution(threshold) => {
+            super::restitution(bodies, (&group.batches, &group.bouncing), &mut group.points, threshold);
+        }
     }
 }
 
@@ -131,7 +133,14 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
         let fresh = moved && matches!(pass, Pass::Solve(_) | Pass::Relax);
         moved &= !fresh;
         let (left, right) = bodies.split_at_mut(*cut + 1);
-        if *merged {
+        // A restitution pass with no batch to visit in any group (a pile at rest): only its
+        // body steps, and no fork.
+        let idle =
+            matches!(pass, Pass::Restitution(_)) && [&*first, &*second, &*across].iter().all(|g| g.bouncing.is_empty());
+        if idle {
+            apply_all(steps, left, kept_left);
+            apply_all(steps, right, kept_right);
+        } else if *merged {
             apply_all(steps, left, kept_left);
             apply_all(steps, right, kept_right);
             // Both sides' constraints in one group, numbered across both (`build_constraints`).

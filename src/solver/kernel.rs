@@ -540,24 +540,31 @@ fn with_levers(linear: Reg, (a, b): (RegVec, RegVec), g: &[LaneVectors; 2]) -> R
     linear + a.dot(RegVec::load(&g[0])) - b.dot(RegVec::load(&g[1]))
 }
 
+/// True when some point of `batch` (its rows `batch_points`) may bounce: a lane with
+/// restitution whose approach speed at the step's start was at least `threshold` [m/s]. Both
+/// are fixed through the step, so `fill` lists these batches once (`ConstraintGroup::bouncing`).
+#[must_use]
+pub fn may_bounce(batch: &Batch, batch_points: &[PointRows], threshold: Scalar) -> bool {
+    let bounces = |point: &PointRows| (0..LANES).any(|l| batch.restitution[l] > 0.0 && point.approach[l] <= -threshold);
+    batch_points.iter().any(bounces)
+}
+
 /// Restitution after the substeps (Box2D v3): a point that touched (`TOUCH_SHARE`) and was
 /// approaching faster than `threshold` [m/s] when the step began leaves at `restitution` times
 /// that speed, by an added normal impulse (accumulated, never pulling). Slower contacts rest:
 /// they do not hop. A manifold's diagonals are solved as blocks here too, so a box landing flat
-/// leaves flat.
+/// leaves flat. Only the batches `bouncing` lists are visited (the others have no point that
+/// `may_bounce`); their bodies are otherwise left as they are.
 pub fn restitution<B: BodyStore + ?Sized>(
     bodies: &mut B,
-    batches: &[Batch],
+    (batches, bouncing): (&[Batch], &[u32]),
     points: &mut [PointRows],
     threshold: Scalar,
 ) {
-    for batch in batches {
-        // Most batches have no point that bounces (resting, or no restitution): their bodies
-        // are left as they are without loading them.
-        let may_bounce =
-            |point: &PointRows| (0..LANES).any(|l| batch.restitution[l] > 0.0 && point.approach[l] <= -threshold);
+    for &b in bouncing {
+        let batch = &batches[b as usize];
         let batch_points = points_of(batch, points);
-        if !batch_points.iter().any(may_bounce) {
+        if !may_bounce(batch, batch_points, threshold) {
             continue;
         }
         let mut lane_bodies = LaneBodies::open(bodies, batch);

@@ -46,7 +46,7 @@ pub(crate) use constraints::build_constraints;
 pub(crate) use drive::{Pass, Step, drive, substep_plan};
 pub(crate) use joint_pass::prepare as prepare_joints;
 pub use joints::{Frame, Joint, JointImpulses, JointKind, Joints, Motor, Spring};
-pub use kernel::{restitution, sweep, warm_start};
+pub use kernel::{may_bounce, restitution, sweep, warm_start};
 pub use lanes::{Batch, FrictionRows, LaneVectors, Lanes, PointRows};
 pub use recycle::recycle_four;
 pub use scratch::{

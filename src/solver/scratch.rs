@@ -35,6 +35,9 @@ pub struct ConstraintGroup {
     pub batches: Vec<Batch>,
     /// Their points, lane by lane.
     pub points: Vec<PointRows>,
+    /// The batches with a point that may bounce (`kernel::may_bounce`), in order: what the
+    /// restitution pass visits. A resting pile has none, and the pass then reads nothing.
+    pub bouncing: Vec<u32>,
 }
 
 /// A pair `solve` holds this step.

@@ -69,7 +69,9 @@ fn run(
             reference::sweep(rb, pairs, h, None);
         }
         Step::Restitution => {
-            kernel::restitution(kb, &group.batches, &mut group.points, threshold);
+            // Every batch offered: the pass itself skips those with no point that may bounce.
+            let all: Vec<u32> = (0..group.batches.len() as u32).collect();
+            kernel::restitution(kb, (&group.batches, &all), &mut group.points, threshold);
             reference::restitution(rb, pairs, threshold);
         }
         Step::Move => {
