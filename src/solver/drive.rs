@@ -137,15 +137,14 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
         // body steps, and no fork.
         let idle =
             matches!(pass, Pass::Restitution(_)) && [&*first, &*second, &*across].iter().all(|g| g.bouncing.is_empty());
-        if idle {
-            apply_all(steps, left, kept_left);
-            apply_all(steps, right, kept_right);
-        } else if *merged {
+        if *merged || idle {
             apply_all(steps, left, kept_left);
             apply_all(steps, right, kept_right);
             // Both sides' constraints in one group, numbered across both (`build_constraints`).
-            run(pass, &mut bodies[..], first, h, fresh);
-            run(pass, &mut bodies[..], across, h, fresh);
+            if !idle {
+                run(pass, &mut bodies[..], first, h, fresh);
+                run(pass, &mut bodies[..], across, h, fresh);
+            }
         } else {
             let mut left_side = || {
                 apply_all(steps, left, kept_left);

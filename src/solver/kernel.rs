@@ -553,8 +553,8 @@ pub fn may_bounce(batch: &Batch, batch_points: &[PointRows], threshold: Scalar) 
 /// approaching faster than `threshold` [m/s] when the step began leaves at `restitution` times
 /// that speed, by an added normal impulse (accumulated, never pulling). Slower contacts rest:
 /// they do not hop. A manifold's diagonals are solved as blocks here too, so a box landing flat
-/// leaves flat. Only the batches `bouncing` lists are visited (the others have no point that
-/// `may_bounce`); their bodies are otherwise left as they are.
+/// leaves flat. Only the batches `bouncing` lists are visited: `fill` lists those with a point
+/// that `may_bounce`, and the others' bodies are left as they are without loading them.
 pub fn restitution<B: BodyStore + ?Sized>(
     bodies: &mut B,
     (batches, bouncing): (&[Batch], &[u32]),
@@ -564,9 +564,6 @@ pub fn restitution<B: BodyStore + ?Sized>(
     for &b in bouncing {
         let batch = &batches[b as usize];
         let batch_points = points_of(batch, points);
-        if !may_bounce(batch, batch_points, threshold) {
-            continue;
-        }
         let mut lane_bodies = LaneBodies::open(bodies, batch);
         let (inv_mass_sum, e_n) = (load(&batch.inv_mass_sum), load(&batch.restitution));
         let largest = batch_points.iter().fold(Reg::ZERO, |m, p| m.max(load(&p.max_impulse)));

@@ -5,7 +5,7 @@ use crate::math::{Mat3, Quat, Scalar, Vector};
 use crate::solver::constraints::{make_idle, place_group, tangents};
 use crate::solver::reference::fill::{couple_pairs, friction_patch};
 use crate::solver::{
-    Constraint, ConstraintGroup, ContactPoint, Friction, HeldPair, Softness, SolverBody, kernel, reference,
+    Batch, Constraint, ConstraintGroup, ContactPoint, Friction, HeldPair, Softness, SolverBody, kernel, reference,
 };
 use proptest::prelude::*;
 use proptest::sample::Index;
@@ -69,9 +69,12 @@ fn run(
             reference::sweep(rb, pairs, h, None);
         }
         Step::Restitution => {
-            // Every batch offered: the pass itself skips those with no point that may bounce.
-            let all: Vec<u32> = (0..group.batches.len() as u32).collect();
-            kernel::restitution(kb, (&group.batches, &all), &mut group.points, threshold);
+            // The batches `fill` would list.
+            let rows = |b: &Batch| &group.points[b.first as usize..(b.first + b.len) as usize];
+            let may =
+                |&k: &u32| kernel::may_bounce(&group.batches[k as usize], rows(&group.batches[k as usize]), threshold);
+            let bouncing: Vec<u32> = (0..group.batches.len() as u32).filter(may).collect();
+            kernel::restitution(kb, (&group.batches, &bouncing), &mut group.points, threshold);
             reference::restitution(rb, pairs, threshold);
         }
         Step::Move => {
