@@ -29,7 +29,8 @@ use crate::collision::manifold::{
 use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
-use crate::solver::{CachedManifold, ContactAnchors, PairEnds, Recycling, SolveScratch, recycle_four};
+use crate::solver::warm_start_of;
+use crate::solver::{CachedManifold, ContactAnchors, PairEnds, Recycling, SolveScratch, WarmStart, recycle_four};
 use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prepare_joints, substep_plan};
 use hecs::World;
 use rayon::prelude::*;
@@ -108,6 +109,7 @@ fn find_manifolds(ctx: &mut StepContext) {
     s.anchors.resize(n, ContactAnchors::default());
     s.recycled.resize(n, false);
     s.ends.resize(n, PairEnds::default());
+    s.warm.resize(n, WarmStart::default());
     let up = -params.gravity.normalize_or_zero();
     s.near.clear();
     s.near.extend(s.pairs.iter().map(|p| p.is_candidate() || p.is_near()));
@@ -120,7 +122,8 @@ fn find_manifolds(ctx: &mut StepContext) {
     let judged: &[Recycling] = if s.recycling_moves == ctx.posed.moves() { &s.recycling } else { &[] };
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
     let rows = rows.zip(s.recycled.par_iter_mut()).zip(cached.par_iter()).zip(s.ends.par_iter_mut());
-    rows.for_each(|((((pair, m), recycled), &entry), ends)| {
+    let rows = rows.zip(s.warm.par_iter_mut());
+    rows.for_each(|(((((pair, m), recycled), &entry), ends), warm)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
         let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.anchors);
@@ -143,6 +146,7 @@ fn find_manifolds(ctx: &mut StepContext) {
                 }
             }
             *ends = PairEnds::of(pair, m, up);
+            *warm = warm_start_of(Some(&cache[entry as usize].1), m.len, None, b.radius[ia]);
         }
     });
     // Only the pairs found afresh need their bodies posed.
@@ -152,8 +156,8 @@ fn find_manifolds(ctx: &mut StepContext) {
     let rows = s.pairs.par_iter_mut().zip(s.manifolds.par_iter_mut());
     let rows =
         rows.zip(s.anchors.par_iter_mut().zip(s.recycled.par_iter())).zip(cached.par_iter().zip(s.near.par_iter()));
-    let rows = rows.zip(s.ends.par_iter_mut()).filter(|(((_, (_, r)), _), _)| !**r);
-    rows.for_each_init(ClipScratch::default, |scratch, ((((pair, m), (anchors, _)), (&entry, &near)), ends)| {
+    let rows = rows.zip(s.ends.par_iter_mut().zip(s.warm.par_iter_mut())).filter(|(((_, (_, r)), _), _)| !**r);
+    rows.for_each_init(ClipScratch::default, |clip, ((((pair, m), (anchors, _)), (&entry, &near)), (ends, warm))| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
         let reach = reach(ia, ib, thin);
@@ -176,7 +180,7 @@ fn find_manifolds(ctx: &mut StepContext) {
             *ends = PairEnds::of(pair, m, up);
             return;
         };
-        *m = manifold(pa, pb, &axis, reach, scratch);
+        *m = manifold(pa, pb, &axis, reach, clip);
         if m.len == 0 {
             // Edge across edge, or nothing left by the clipping: one point where they meet.
             (m.points[0], m.gaps[0], m.len) = (support_point(pa, pb, &axis), axis.separation, 1);
@@ -187,6 +191,7 @@ fn find_manifolds(ctx: &mut StepContext) {
         pair.state = PairState::Resolved(contact);
         *anchors = ContactAnchors { axis: Some(axis.reference), ..fixed_to_bodies(m, axis.normal, b, ia, ib) };
         *ends = PairEnds::of(pair, m, up);
+        *warm = warm_start_of(cache.get(entry as usize).map(|e| &e.1), m.len, Some(anchors), b.radius[ia]);
     });
 }
 

@@ -11,7 +11,7 @@ use crate::collision::manifold::Manifold;
 use crate::math::{Mat3, Scalar, Vector, total_order_key};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
-use crate::solver::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, PairEnds, SolveScratch};
+use crate::solver::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, PairEnds, SolveScratch, WarmStart};
 
 /// Fastest push out of a penetration [m/s] (Box2D v3's and rapier's 3 m/s): faster, a cube
 /// squeezed into a pile is shot out of it.
@@ -20,6 +20,35 @@ const MAX_PUSH: Scalar = 3.0;
 /// A new point takes the impulse of last step's point within this distance on A [fraction of
 /// A's radius]: the same corner one step later.
 const MATCH_DISTANCE: Scalar = 0.05;
+
+/// The impulses a pair's `len` points take from its cache entry `cached` (last step's points
+/// and impulses), if any: a recycled point (`new` is `None`) is last step's own; a new one, at
+/// `new`'s anchors, takes the impulse of the old point at the same place on A (within
+/// `MATCH_DISTANCE` of A's radius `radius_a`), if any. Only a new point bounces (rapier's
+/// rule): one held since last step is resting or rocking on it, and bouncing there keeps a
+/// settling pile astir.
+pub(crate) fn warm_start_of(
+    cached: Option<&CachedManifold>,
+    len: usize,
+    new: Option<&ContactAnchors>,
+    radius_a: Scalar,
+) -> WarmStart {
+    let mut warm = WarmStart::default();
+    let Some(c) = cached else { return warm };
+    for j in 0..len {
+        let old = match new {
+            None => Some(j),
+            Some(a) => {
+                (0..c.anchors.len).find(|&q| (c.anchors.on_a[q] - a.on_a[j]).length() <= MATCH_DISTANCE * radius_a)
+            }
+        };
+        if let Some(q) = old {
+            (warm.normal[j], warm.kept[j]) = (c.normal[q], true);
+        }
+    }
+    (warm.tangent, warm.twist) = (c.tangent, c.twist);
+    warm
+}
 
 /// One constraint per held pair and one point per manifold point (lever vectors, effective
 /// masses, the impulses of last step's matching point), placed in batches of independent
@@ -78,22 +107,8 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     }
     // The two sides' groups placed and filled at once (they write disjoint batches), the third
     // by whichever thread is free first.
-    let SolveScratch { groups, held, pairs, manifolds, slot, scale, cache, cached, anchors, recycled, .. } = s;
-    let shared = Shared {
-        bodies: b,
-        params,
-        dt,
-        meshes: &ctx.meshes,
-        held,
-        pairs,
-        manifolds,
-        slot,
-        scale,
-        cache,
-        cached,
-        anchors,
-        recycled,
-    };
+    let SolveScratch { groups, held, pairs, manifolds, slot, scale, warm, .. } = s;
+    let shared = Shared { bodies: b, params, dt, meshes: &ctx.meshes, held, pairs, manifolds, slot, scale, warm };
     let [first, second, across] = groups;
     let build = |which: u8, group: &mut ConstraintGroup| {
         place_group(held, which, group);
@@ -243,10 +258,7 @@ struct Shared<'a> {
     manifolds: &'a [Manifold],
     slot: &'a [u32],
     scale: &'a [Mat3],
-    cache: &'a [((u32, u32), CachedManifold)],
-    cached: &'a [u32],
-    anchors: &'a [ContactAnchors],
-    recycled: &'a [bool],
+    warm: &'a [WarmStart],
 }
 
 /// Writes the constraints and points of group `which`'s held pairs into its batches (their
@@ -298,33 +310,19 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
             input.slop[l] = params.slop * thin;
             input.max_push[l] = (params.max_correction * thin / dt).min(MAX_PUSH);
             input.len[l] = m.len as Scalar;
-            let cached = (sh.cached[k as usize] != u32::MAX).then(|| &sh.cache[sh.cached[k as usize] as usize].1);
-            let (anchors, recycled) = (&sh.anchors[k as usize], sh.recycled[k as usize]);
+            let warm = &sh.warm[k as usize];
             for j in 0..rows.len() {
                 // Past the lane's own points: its first again, taking an impulse (so no bounce).
                 let own = j < m.len;
                 let at = if own { j } else { 0 };
                 input.points[j].set(l, m.points[at]);
                 input.gap[j][l] = m.gaps[at];
-                // A recycled point is last step's own; a new one takes the impulse of the old
-                // point at the same place on A, if any. Only a new point bounces (rapier's
-                // rule): one held since last step is resting or rocking on it, and bouncing
-                // there keeps a settling pile astir.
-                let old = if own {
-                    cached.and_then(|c| {
-                        let near =
-                            |q: usize| (c.anchors.on_a[q] - anchors.on_a[j]).length() <= MATCH_DISTANCE * b.radius[ia];
-                        if recycled { Some(j) } else { (0..c.anchors.len).find(|&q| near(q)) }.map(|q| c.normal[q])
-                    })
-                } else {
-                    Some(0.0)
-                };
-                input.impulse[j][l] = old.unwrap_or(0.0);
-                input.kept[j][l] = if old.is_some() { 1.0 } else { 0.0 };
+                let kept = !own || warm.kept[j];
+                input.impulse[j][l] = if own { warm.normal[j] } else { 0.0 };
+                input.kept[j][l] = if kept { 1.0 } else { 0.0 };
             }
-            let (jt, jw) = cached.map_or((Vector::ZERO, Vector::ZERO), |c| (c.tangent, c.twist));
-            input.tangent_impulse.set(l, jt);
-            input.twist_impulse.set(l, jw);
+            input.tangent_impulse.set(l, warm.tangent);
+            input.twist_impulse.set(l, warm.twist);
         }
         super::fill::fill_lanes(&input, count, *static_slot, compliance, batch, rows);
         if super::may_bounce(batch, rows, threshold) {

@@ -42,7 +42,7 @@ mod reference;
 mod regs;
 mod scratch;
 
-pub(crate) use constraints::build_constraints;
+pub(crate) use constraints::{build_constraints, warm_start_of};
 pub(crate) use drive::{Pass, Step, drive, substep_plan};
 pub(crate) use joint_pass::prepare as prepare_joints;
 pub use joints::{Frame, Joint, JointImpulses, JointKind, Joints, Motor, Spring};
@@ -50,7 +50,8 @@ pub use kernel::{may_bounce, restitution, sweep, warm_start};
 pub use lanes::{Batch, FrictionRows, LaneVectors, Lanes, PointRows};
 pub use recycle::recycle_four;
 pub use scratch::{
-    CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, PairEnds, Recycling, SolveScratch, cache_entries,
+    CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, PairEnds, Recycling, SolveScratch, WarmStart,
+    cache_entries,
 };
 
 /// A body as the substeps see it.

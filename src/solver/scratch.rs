@@ -94,6 +94,20 @@ pub struct CachedManifold {
     pub found: Option<Feature>,
 }
 
+/// A held pair's impulses taken from last step's (`solve::find_manifolds`), what building its
+/// constraint reads of the warm-start cache.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WarmStart {
+    /// Each point's normal impulse from last step's point it matches [N·s] (0 for none).
+    pub normal: [Scalar; MAX_POINTS],
+    /// Whether each point matched one of last step's (it then does not bounce).
+    pub kept: [bool; MAX_POINTS],
+    /// Last step's friction impulse at the patch centre [N·s].
+    pub tangent: Vector,
+    /// Last step's twist impulse about the normal [N·m·s].
+    pub twist: Vector,
+}
+
 /// Whether a pair with an entry in the warm-start cache keeps its points this step, worked out
 /// once: by `prune`, which takes such pairs out of the detection tests, and read by `solve`
 /// instead of being worked out again, if no body moved in between.
@@ -181,6 +195,10 @@ pub struct SolveScratch {
     pub anchors: Vec<ContactAnchors>,
     /// Whether each pair's anchors was recycled from the previous step.
     pub recycled: Vec<bool>,
+    /// Each pair's impulses from last step's matching points (in `pairs` order), matched when
+    /// its manifold is found: building the constraints reads them here, in solving order,
+    /// instead of from the cache entries and anchors, which that order visits at random.
+    pub warm: Vec<WarmStart>,
     /// Each pair's index in `cache` (`u32::MAX` for none).
     pub cached: Vec<u32>,
     /// The held pairs' indices into `held` (their places in the solving order), in pair order,
