@@ -126,17 +126,18 @@ fn find_manifolds(ctx: &mut StepContext) {
     rows.for_each(|(((((pair, m), recycled), &entry), ends), warm)| {
         let (ia, ib) = (pair.a as usize, pair.b as usize);
         let thin = b.thinner(meshes, ia, ib);
-        let old = (entry != u32::MAX).then(|| &cache[entry as usize].1.anchors);
+        let old = (entry != u32::MAX).then(|| &cache[entry as usize].1);
         *recycled = false;
         let verdict = judged.get(entry as usize).filter(|v| v.step == Some(step));
-        let kept = old.and_then(|g| verdict.map_or_else(|| recycled_points(g, b, thin, ia, ib), |v| v.manifold));
+        let kept =
+            old.and_then(|g| verdict.map_or_else(|| recycled_points(&g.anchors, b, thin, ia, ib), |v| v.manifold));
         if let (Some(old), Some(kept)) = (old, kept) {
             // The anchors stay in the cache entry (`remember` reads them there).
             (*recycled, *m) = (true, kept);
             let feature = pair.contact().map_or(Feature::Face, |c| c.feature);
             let contact = match verdict {
                 Some(v) => v.contact.map(|c| Contact { feature, ..c }),
-                None => recycled_contact(m, old, b, ia, feature),
+                None => recycled_contact(m, &old.anchors, b, ia, feature),
             };
             match contact {
                 Some(c) if -c.depth <= reach(ia, ib, thin) => pair.state = PairState::Resolved(c),
@@ -146,7 +147,7 @@ fn find_manifolds(ctx: &mut StepContext) {
                 }
             }
             *ends = PairEnds::of(pair, m, up);
-            *warm = warm_start_of(Some(&cache[entry as usize].1), m.len, None, b.radius[ia]);
+            *warm = warm_start_of(Some(old), m.len, None, b.radius[ia]);
         }
     });
     // Only the pairs found afresh need their bodies posed.
@@ -168,7 +169,8 @@ fn find_manifolds(ctx: &mut StepContext) {
         // Searched from last step's axis, if the pair was held then. A pair no test found
         // touching is held only speculatively: if the face that axis climbs to parts the
         // bodies, it will do (`climbed_axis`).
-        let hint = cache.get(entry as usize).and_then(|e| e.1.anchors.axis);
+        let last = cache.get(entry as usize).map(|e| &e.1);
+        let hint = last.and_then(|e| e.anchors.axis);
         let climbed = hint.and_then(Reference::face).filter(|_| near).and_then(|f| climbed_axis(pa, pb, f));
         let axis = match climbed {
             Some(x) => (x.separation <= reach).then_some(x),
@@ -191,7 +193,7 @@ fn find_manifolds(ctx: &mut StepContext) {
         pair.state = PairState::Resolved(contact);
         *anchors = ContactAnchors { axis: Some(axis.reference), ..fixed_to_bodies(m, axis.normal, b, ia, ib) };
         *ends = PairEnds::of(pair, m, up);
-        *warm = warm_start_of(cache.get(entry as usize).map(|e| &e.1), m.len, Some(anchors), b.radius[ia]);
+        *warm = warm_start_of(last, m.len, Some(anchors), b.radius[ia]);
     });
 }
 
