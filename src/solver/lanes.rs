@@ -40,32 +40,37 @@ impl LaneVectors {
 /// Up to `LANES` constraints that share no free body, solved together (`super::place`); their
 /// points are `points[first..first + len]`, one `PointRows` per point index. Unused lanes, and
 /// a lane's points beyond its own count, are idle: zero masses, both ends the static slot.
+///
+/// Every sweep streams its batches through the cache (on two threads, both sides at once): the
+/// fields a solve sweep reads come first, on cache lines of their own, so a solve sweep does
+/// not load the lines of friction it never reads.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(64))]
 pub struct Batch {
     /// Solver-body slots of A (index 0) and B of each lane.
     pub slot: [[u32; LANES]; 2],
     /// Unit normals, from B to A.
     pub normal: LaneVectors,
-    /// The two tangents.
-    pub tangents: [LaneVectors; 2],
     /// Inverse masses of A and B [1/kg].
     pub inv_mass: [Lanes; 2],
     /// Their sum m_a⁻¹ + m_b⁻¹, the normal rows' linear part of K.
     pub inv_mass_sum: Lanes,
-    /// Friction coefficients.
-    pub mu: Lanes,
-    /// Restitutions.
-    pub restitution: Lanes,
     /// Penetration left alone [m].
     pub slop: Lanes,
     /// Fastest push out of a penetration [m/s].
     pub max_push: Lanes,
-    /// The friction patches.
-    pub friction: FrictionRows,
     /// First entry of the batch's points.
     pub first: u32,
     /// Most points of any lane.
     pub len: u32,
+    /// The two tangents.
+    pub tangents: [LaneVectors; 2],
+    /// Friction coefficients.
+    pub mu: Lanes,
+    /// Restitutions.
+    pub restitution: Lanes,
+    /// The friction patches.
+    pub friction: FrictionRows,
 }
 
 impl Batch {
@@ -131,8 +136,12 @@ impl FrictionRows {
     }
 }
 
-/// One point of each lane of a batch (see `super::ContactPoint`).
+/// One point of each lane of a batch (see `super::ContactPoint`). What every sweep reads comes
+/// first and what only the first point of a pair reads (its coupling) after, each on cache lines
+/// of their own, then what only the relax sweep and restitution read: a solve sweep loads six
+/// lines of a pair's second row, not all nine.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(64))]
 pub struct PointRows {
     /// g = S (r × n) for A and B.
     pub g: [LaneVectors; 2],
@@ -142,21 +151,21 @@ pub struct PointRows {
     pub k: Lanes,
     /// Accumulated normal impulses [N·s].
     pub impulse: Lanes,
-    /// Gaps when the step began [m].
-    pub gap: Lanes,
+    /// Largest normal impulse of any substep [N·s].
+    pub max_impulse: Lanes,
     /// Gaps as the substeps have moved the bodies, kept by the last sweep that worked them
     /// out (`kernel::sweep`) [m].
     pub now: Lanes,
-    /// Relative normal speeds when the step began [m/s].
-    pub approach: Lanes,
-    /// Largest normal impulse of any substep [N·s].
-    pub max_impulse: Lanes,
-    /// Distances from the friction centre [m].
-    pub lever: Lanes,
+    /// Gaps when the step began [m].
+    pub gap: Lanes,
     /// K₀₁ with the next point, for the first of a pair [1/kg].
     pub coupling: Lanes,
     /// 1 / det K of the pair held rigidly and soft, for the first of a pair [kg²].
     pub inv_det: [Lanes; 2],
+    /// Distances from the friction centre [m].
+    pub lever: Lanes,
+    /// Relative normal speeds when the step began [m/s].
+    pub approach: Lanes,
 }
 
 impl PointRows {
