@@ -312,27 +312,29 @@ fn normal_pair<const RIGID: bool>(
             let (rp, rq) = (NormalRows::new(p, gp, batch, h, soft), NormalRows::new(q, gq, batch, h, soft));
             let (up, uq) = (lane_bodies.normal_speed(&p.g), lane_bodies.normal_speed(&q.g));
             let (new_p, new_q) = block::<RIGID>(&rp, &rq, up, uq, (load(&p.coupling), p.inv_det.map(|d| load(&d))));
-            let (dp, dq) = (settle(p, new_p), settle(q, new_q));
+            let (dp, dq) = (settle::<RIGID>(p, new_p), settle::<RIGID>(q, new_q));
             lane_bodies.push_normal(&p.g, inv_mass_sum, dp);
             lane_bodies.push_normal(&q.g, inv_mass_sum, dq);
         }
         [p] => {
             let gap = gap_now(p, motion);
             let row = NormalRows::new(p, gap, batch, h, soft);
-            let dp = settle(p, row.single::<RIGID>(lane_bodies.normal_speed(&p.g)));
+            let dp = settle::<RIGID>(p, row.single::<RIGID>(lane_bodies.normal_speed(&p.g)));
             lane_bodies.push_normal(&p.g, inv_mass_sum, dp);
         }
         _ => {}
     }
 }
 
-/// Stores a point's new accumulated impulses `new` (and the largest so far); returns the
-/// change, the impulse still to apply.
+/// Stores a point's new accumulated impulses `new`, and with `RIGID` (the relax sweep, which
+/// ends a substep) the largest so far; returns the change, the impulse still to apply.
 #[inline(always)]
-fn settle(p: &mut PointRows, new: Reg) -> Reg {
+fn settle<const RIGID: bool>(p: &mut PointRows, new: Reg) -> Reg {
     let change = new - load(&p.impulse);
     p.impulse = new.to_array();
-    p.max_impulse = load(&p.max_impulse).max(new).to_array();
+    if RIGID {
+        p.max_impulse = load(&p.max_impulse).max(new).to_array();
+    }
     change
 }
 

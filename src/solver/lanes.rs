@@ -137,9 +137,10 @@ impl FrictionRows {
 }
 
 /// One point of each lane of a batch (see `super::ContactPoint`). What every sweep reads comes
-/// first and what only the first point of a pair reads (its coupling) after, each on cache lines
-/// of their own, then what only the relax sweep and restitution read: a solve sweep loads six
-/// lines of a pair's second row, not all nine.
+/// first, then what only the first point of a pair reads (its coupling), then what only the
+/// sweeps after a move (`gap`), the relax sweep and restitution read, each on cache lines of
+/// their own: a solve sweep loads five lines of a pair's second row and seven of its first, of
+/// nine each.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(64))]
 pub struct PointRows {
@@ -151,17 +152,17 @@ pub struct PointRows {
     pub k: Lanes,
     /// Accumulated normal impulses [N·s].
     pub impulse: Lanes,
-    /// Largest normal impulse of any substep [N·s].
-    pub max_impulse: Lanes,
     /// Gaps as the substeps have moved the bodies, kept by the last sweep that worked them
     /// out (`kernel::sweep`) [m].
     pub now: Lanes,
-    /// Gaps when the step began [m].
-    pub gap: Lanes,
     /// K₀₁ with the next point, for the first of a pair [1/kg].
     pub coupling: Lanes,
     /// 1 / det K of the pair held rigidly and soft, for the first of a pair [kg²].
     pub inv_det: [Lanes; 2],
+    /// Gaps when the step began [m].
+    pub gap: Lanes,
+    /// Largest normal impulse at the end of any substep (its relax sweep) [N·s].
+    pub max_impulse: Lanes,
     /// Distances from the friction centre [m].
     pub lever: Lanes,
     /// Relative normal speeds when the step began [m/s].

@@ -234,7 +234,8 @@ pub struct ContactPoint {
     /// Relative normal speed when the step began [m/s] (< 0 approaching): what restitution
     /// reverses.
     pub approach: Scalar,
-    /// Largest normal impulse of any substep [N·s]: > 0 when the point touched.
+    /// Largest normal impulse at the end of any substep (after its relax sweep) [N·s]: > 0
+    /// when the point touched.
     pub max_impulse: Scalar,
     /// Distance from the friction centre [m]: the point's lever against twisting.
     pub lever: Scalar,

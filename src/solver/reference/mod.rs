@@ -183,11 +183,14 @@ fn block(p: &Row, q: &Row, up: Scalar, uq: Scalar, m01: Scalar) -> (Scalar, Scal
     gauss_seidel(p, q, up, uq, m01)
 }
 
-/// Stores a point's new accumulated impulse; returns the change.
-fn settle(p: &mut ContactPoint, new: Scalar) -> Scalar {
+/// Stores a point's new accumulated impulse, and in the relax sweep (`soft` is `None`) the
+/// largest so far; returns the change.
+fn settle(p: &mut ContactPoint, new: Scalar, soft: Option<Softness>) -> Scalar {
     let change = new - p.impulse;
     p.impulse = new;
-    p.max_impulse = max(p.max_impulse, new);
+    if soft.is_none() {
+        p.max_impulse = max(p.max_impulse, new);
+    }
     change
 }
 
@@ -245,13 +248,13 @@ fn normal_pair(
             let (rp, rq) = (Row::new(p, motion.gap(p), c, h, soft), Row::new(q, motion.gap(q), c, h, soft));
             let (up, uq) = (e.normal_speed(p.g), e.normal_speed(q.g));
             let (new_p, new_q) = block(&rp, &rq, up, uq, p.coupling);
-            let (dp, dq) = (settle(p, new_p), settle(q, new_q));
+            let (dp, dq) = (settle(p, new_p, soft), settle(q, new_q, soft));
             e.push_normal(p.g, inv_mass_sum, dp);
             e.push_normal(q.g, inv_mass_sum, dq);
         }
         [p] => {
             let row = Row::new(p, motion.gap(p), c, h, soft);
-            let dp = settle(p, row.single(e.normal_speed(p.g)));
+            let dp = settle(p, row.single(e.normal_speed(p.g)), soft);
             e.push_normal(p.g, inv_mass_sum, dp);
         }
         _ => unreachable!("chunks of two"),
