@@ -12,6 +12,7 @@ use crate::math::{Mat3, Scalar, Vector, total_order_key};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
 use crate::solver::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, PairEnds, SolveScratch, WarmStart};
+use rayon::prelude::*;
 
 /// Fastest push out of a penetration [m/s] (Box2D v3's and rapier's 3 m/s): faster, a cube
 /// squeezed into a pile is shot out of it.
@@ -418,18 +419,20 @@ fn gather_bodies(b: &Bodies, parts: BodyParts) {
         let s = |d: Vector| r * Mat3::from_diagonal(d) * r.transpose();
         (s(m.map(|m| 1.0 / m.sqrt())), s(m.map(Scalar::sqrt)))
     };
+    // Each side's bodies, then its static slot; in parallel (a square root or three a body).
     scale.clear();
     bodies.clear();
+    scale.resize(moving.len() + 2, Mat3::ZERO);
+    bodies.resize(moving.len() + 2, SolverBody::default());
     let (first, second) = moving.split_at(*left);
-    for side in [first, second] {
-        for &i in side {
-            let (i, (s, unscale)) = (i as usize, scales(i as usize));
-            bodies.push(SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() });
-            scale.push(s);
-        }
-        // The side's static slot.
-        scale.push(Mat3::ZERO);
-        bodies.push(SolverBody::default());
+    let ((left_bodies, right_bodies), (left_scale, right_scale)) =
+        (bodies.split_at_mut(*left + 1), scale.split_at_mut(*left + 1));
+    for (side, bodies, scale) in [(first, left_bodies, left_scale), (second, right_bodies, right_scale)] {
+        side.par_iter().zip(bodies.par_iter_mut()).zip(scale.par_iter_mut()).for_each(|((&i, body), s)| {
+            let (i, (scale, unscale)) = (i as usize, scales(i as usize));
+            *s = scale;
+            *body = SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() };
+        });
     }
 }
 
