@@ -139,8 +139,8 @@ impl FrictionRows {
 /// One point of each lane of a batch (see `super::ContactPoint`). What every sweep reads comes
 /// first, then what only the first point of a pair reads (its coupling), then what only the
 /// sweeps after a move (`gap`), the relax sweep and restitution read, each on cache lines of
-/// their own: a solve sweep loads five lines of a pair's second row and seven of its first, of
-/// nine each.
+/// their own: a solve sweep between two moves loads five lines of a pair's second row and seven
+/// of its first, of nine each.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(64))]
 pub struct PointRows {
