@@ -420,20 +420,14 @@ fn gather_bodies(b: &Bodies, parts: BodyParts) {
         (s(m.map(|m| 1.0 / m.sqrt())), s(m.map(Scalar::sqrt)))
     };
     // Each side's bodies, then its static slot; in parallel (a square root or three a body).
-    scale.clear();
-    bodies.clear();
-    scale.resize(moving.len() + 2, Mat3::ZERO);
-    bodies.resize(moving.len() + 2, SolverBody::default());
+    let body = |&i: &u32| {
+        let (i, (scale, unscale)) = (i as usize, scales(i as usize));
+        (SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() }, scale)
+    };
+    let static_slot = || rayon::iter::once((SolverBody::default(), Mat3::ZERO));
     let (first, second) = moving.split_at(*left);
-    let ((left_bodies, right_bodies), (left_scale, right_scale)) =
-        (bodies.split_at_mut(*left + 1), scale.split_at_mut(*left + 1));
-    for (side, bodies, scale) in [(first, left_bodies, left_scale), (second, right_bodies, right_scale)] {
-        side.par_iter().zip(bodies.par_iter_mut()).zip(scale.par_iter_mut()).for_each(|((&i, body), s)| {
-            let (i, (scale, unscale)) = (i as usize, scales(i as usize));
-            *s = scale;
-            *body = SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() };
-        });
-    }
+    let sides = first.par_iter().map(body).chain(static_slot()).chain(second.par_iter().map(body));
+    sides.chain(static_slot()).unzip_into_vecs(bodies, scale);
 }
 
 /// Two unit vectors completing `n` to a right-handed orthonormal basis.
