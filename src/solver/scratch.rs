@@ -131,15 +131,21 @@ pub fn cache_entries<T>(cache: &[((u32, u32), T)], pairs: &[Pair], out: &mut Vec
 
 /// `cache_entries` of the pairs in a list of `len` entries whose keys `key` gives.
 fn merge_entries(len: usize, key: impl Fn(usize) -> (u32, u32), pairs: &[Pair], out: &mut Vec<u32>) {
+    // Keys packed into one number each, ordered as the pairs: one comparison a step of the
+    // walk, where a pair of numbers took two hard-to-predict branches. Past the last entry the
+    // walk sees a key above every pair's (a < b, so no pair packs to it).
+    let pack = |(a, b): (u32, u32)| (u64::from(a) << 32) | u64::from(b);
+    let key_at = |at: usize| if at < len { pack(key(at)) } else { u64::MAX };
+    let (mut at, mut next) = (0, key_at(0));
     out.clear();
-    let mut at = 0;
-    for pair in pairs {
-        let wanted = (pair.a, pair.b);
-        while at < len && key(at) < wanted {
+    out.extend(pairs.iter().map(|pair| {
+        let wanted = pack((pair.a, pair.b));
+        while next < wanted {
             at += 1;
+            next = key_at(at);
         }
-        out.push(if at < len && key(at) == wanted { at as u32 } else { u32::MAX });
-    }
+        if next == wanted { at as u32 } else { u32::MAX }
+    }));
 }
 
 /// A pair's two bodies, the number of points it is held at (0: not held) and its place in
@@ -271,5 +277,50 @@ impl SolveScratch {
     pub fn entries_of(&self, pairs: &[Pair], out: &mut Vec<u32>) {
         debug_assert_eq!(self.cache_keys.len(), self.cache.len(), "the keys are the cache's");
         merge_entries(self.cache_keys.len(), |e| self.cache_keys[e], pairs, out);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The merge finds each pair's entry as a search of the whole list would, with entries
+    /// past the last pair, pairs past the last entry, and both lists empty.
+    #[test]
+    fn each_pair_finds_its_entry_or_none() {
+        let mut rng = crate::rng::SplitMix64::new(5);
+        let mut out = Vec::new();
+        for round in 0..200 {
+            let mut keys: Vec<(u32, u32)> = (0..rng.next_u64() % 40)
+                .map(|_| {
+                    let a = (rng.next_u64() % 12) as u32;
+                    (a, a + 1 + (rng.next_u64() % 12) as u32)
+                })
+                .collect();
+            // The largest actor indices too, where packing the two into one number matters.
+            if round % 7 == 0 {
+                keys.push((u32::MAX - 1, u32::MAX));
+            }
+            keys.sort_unstable();
+            keys.dedup();
+            let cache: Vec<((u32, u32), ())> = keys.iter().map(|&k| (k, ())).collect();
+            let mut pairs: Vec<Pair> = (0..rng.next_u64() % 40)
+                .map(|_| {
+                    let a = (rng.next_u64() % 14) as u32;
+                    Pair::candidate(a, a + 1 + (rng.next_u64() % 14) as u32)
+                })
+                .collect();
+            if round % 5 == 0 {
+                pairs.push(Pair::candidate(u32::MAX - 1, u32::MAX));
+            }
+            pairs.sort_unstable_by_key(|p| (p.a, p.b));
+            pairs.dedup_by_key(|p| (p.a, p.b));
+            cache_entries(&cache, &pairs, &mut out);
+            let want: Vec<u32> = pairs
+                .iter()
+                .map(|p| keys.iter().position(|&k| k == (p.a, p.b)).map_or(u32::MAX, |e| e as u32))
+                .collect();
+            assert_eq!(out, want, "keys {keys:?}");
+        }
     }
 }
