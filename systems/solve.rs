@@ -30,7 +30,10 @@ use crate::math::{Quat, Scalar, Vector, exp_map};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
 use crate::solver::warm_start_of;
-use crate::solver::{CachedManifold, ContactAnchors, PairEnds, Recycling, SolveScratch, WarmStart, recycle_four};
+use crate::solver::{
+    CachedManifold, ConstraintGroup, ContactAnchors, LANES, LaneImpulses, PairEnds, Recycling, SolveScratch, WarmStart,
+    recycle_four,
+};
 use crate::solver::{Joints, Pass, Softness, Step, build_constraints, drive, prepare_joints, substep_plan};
 use hecs::World;
 use rayon::prelude::*;
@@ -372,6 +375,9 @@ fn remember(ctx: &mut StepContext) {
     let (held, cached) = (&s.held, &s.cached);
     let in_place = s.by_pair.len() == s.cache.len()
         && s.by_pair.iter().enumerate().all(|(e, &h)| cached[held[h as usize].pair as usize] == e as u32);
+    // Each lane's impulses first, batch by batch: a batch's lines are read once for its four
+    // lanes, not once for each at random in the cache's order.
+    s.groups.par_iter_mut().for_each(lane_impulses);
     // Written in parallel: a serial part of the step waits for both threads.
     let (pairs, groups, anchors, near, recycled) = (&s.pairs, &s.groups, &s.anchors, &s.near, &s.recycled);
     // Held entry h's impulses, verdict and (if given) anchors into `out`; its feature if it
@@ -389,15 +395,12 @@ fn remember(ctx: &mut StepContext) {
         }
         let group = &groups[usize::from(held.group)];
         let (batch, lane) = group.placed[held.at as usize];
-        let (batch, lane) = (&group.batches[batch as usize], usize::from(lane));
-        let [n, t1, t2] = batch.axes(lane);
-        let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
-        (out.tangent, out.twist) = (t1 * j1 + t2 * j2, n * jw);
+        let kept = &group.impulses[batch as usize * LANES + usize::from(lane)];
+        (out.tangent, out.twist) = (kept.tangent, kept.twist);
         out.found = pairs[k].contact().filter(|_| !near[k]).map(|c| c.feature);
+        let len = usize::from(held.len);
         out.normal = [0.0; MAX_POINTS];
-        for j in 0..usize::from(held.len) {
-            out.normal[j] = group.points[batch.first as usize + j].impulse[lane];
-        }
+        out.normal[..len].copy_from_slice(&kept.normal[..len]);
         // Counted if it pushed.
         out.found.filter(|_| out.normal.iter().any(|&j| j > 0.0))
     };
@@ -437,6 +440,25 @@ fn remember(ctx: &mut StepContext) {
     for (total, n) in ctx.stats.impulses.iter_mut().zip(impulses) {
         *total += n;
     }
+}
+
+/// Each used lane's impulses after the substeps into `group.impulses` (`remember`): its points'
+/// normal impulses and its friction patch's, turned into world vectors.
+fn lane_impulses(group: &mut ConstraintGroup) {
+    let ConstraintGroup { batches, points, fill, impulses, .. } = group;
+    impulses.resize(batches.len() * LANES, LaneImpulses::default());
+    let rows = impulses.par_chunks_mut(LANES).zip(batches.par_iter().zip(fill.par_iter()));
+    rows.for_each(|(out, (batch, &count))| {
+        let rows = &points[batch.first as usize..(batch.first + batch.len) as usize];
+        for (lane, out) in out.iter_mut().enumerate().take(usize::from(count)) {
+            let [n, t1, t2] = batch.axes(lane);
+            let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);
+            (out.tangent, out.twist) = (t1 * j1 + t2 * j2, n * jw);
+            for (normal, row) in out.normal.iter_mut().zip(rows) {
+                *normal = row.impulse[lane];
+            }
+        }
+    });
 }
 
 #[cfg(test)]

@@ -50,8 +50,8 @@ pub use kernel::{may_bounce, restitution, sweep, warm_start};
 pub use lanes::{Batch, FrictionRows, LaneVectors, Lanes, PointRows};
 pub use recycle::recycle_four;
 pub use scratch::{
-    CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, PairEnds, Recycling, SolveScratch, WarmStart,
-    cache_entries,
+    CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, LaneImpulses, PairEnds, Recycling, SolveScratch,
+    WarmStart, cache_entries,
 };
 
 /// A body as the substeps see it.

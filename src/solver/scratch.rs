@@ -38,6 +38,20 @@ pub struct ConstraintGroup {
     /// The batches with a point that may bounce (`kernel::may_bounce`), in order: what the
     /// restitution pass visits. A resting pile has none, and the pass then reads nothing.
     pub bouncing: Vec<u32>,
+    /// Scratch of `solve::remember`: each lane's impulses after the substeps, lane l of batch
+    /// b at b · `LANES` + l.
+    pub impulses: Vec<LaneImpulses>,
+}
+
+/// A lane's impulses after the substeps, as the warm-start cache keeps them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LaneImpulses {
+    /// Each of its batch's points' normal impulse [N·s] (past the lane's own points, idle).
+    pub normal: [Scalar; MAX_POINTS],
+    /// Friction impulse at the patch's centre, world frame [N·s].
+    pub tangent: Vector,
+    /// Twist impulse about the normal, world frame [N·m·s].
+    pub twist: Vector,
 }
 
 /// A pair `solve` holds this step.
