@@ -449,7 +449,7 @@ fn lane_impulses(group: &mut ConstraintGroup) {
     impulses.resize(batches.len() * LANES, LaneImpulses::default());
     let rows = impulses.par_chunks_mut(LANES).zip(batches.par_iter().zip(fill.par_iter()));
     rows.for_each(|(out, (batch, &count))| {
-        let rows = &points[batch.first as usize..(batch.first + batch.len) as usize];
+        let rows = &points[batch.rows()];
         for (lane, out) in out.iter_mut().enumerate().take(usize::from(count)) {
             let [n, t1, t2] = batch.axes(lane);
             let [j1, j2, jw] = batch.friction.impulse.map(|j| j[lane]);

@@ -234,7 +234,7 @@ pub(super) fn make_idle(held: &[HeldPair], which: u8, group: &mut ConstraintGrou
         for l in usize::from(count)..LANES {
             batch.set(l, &idle);
         }
-        for row in &mut points[batch.first as usize..(batch.first + batch.len) as usize] {
+        for row in &mut points[batch.rows()] {
             for l in usize::from(count)..LANES {
                 row.set(l, &ContactPoint::IDLE);
             }
@@ -285,7 +285,7 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     let mut input = LaneInputs::default();
     for (at, ((batch, &count), lanes)) in batches.iter_mut().zip(counts.iter()).zip(lanes.iter()).enumerate() {
         let count = usize::from(count);
-        let rows = &mut points[batch.first as usize..(batch.first + batch.len) as usize];
+        let rows = &mut points[batch.rows()];
         // An idle lane repeats lane 0 (`LaneInputs`).
         for l in 0..LANES {
             let (k, c) = lanes[if l < count { l } else { 0 }];

@@ -206,7 +206,7 @@ impl Motion {
 /// A batch's points.
 #[inline(always)]
 fn points_of<'a>(batch: &Batch, points: &'a mut [PointRows]) -> &'a mut [PointRows] {
-    &mut points[batch.first as usize..(batch.first + batch.len) as usize]
+    &mut points[batch.rows()]
 }
 
 /// Re-applies each row's accumulated impulse (the previous substep's, or the previous step's

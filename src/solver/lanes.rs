@@ -84,6 +84,12 @@ impl Batch {
         batch
     }
 
+    /// Where its points are in its group's point rows: `first..first + len`.
+    #[must_use]
+    pub fn rows(&self) -> std::ops::Range<usize> {
+        self.first as usize..(self.first + self.len) as usize
+    }
+
     /// Puts constraint `c` in lane `l`.
     pub fn set(&mut self, l: usize, c: &Constraint) {
         (self.slot[0][l], self.slot[1][l]) = (c.slot[0], c.slot[1]);

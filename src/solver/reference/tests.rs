@@ -70,7 +70,7 @@ fn run(
         }
         Step::Restitution => {
             // The batches `fill` would list.
-            let rows = |b: &Batch| &group.points[b.first as usize..(b.first + b.len) as usize];
+            let rows = |b: &Batch| &group.points[b.rows()];
             let may =
                 |&k: &u32| kernel::may_bounce(&group.batches[k as usize], rows(&group.batches[k as usize]), threshold);
             let bouncing: Vec<u32> = (0..group.batches.len() as u32).filter(may).collect();
