@@ -115,7 +115,13 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         place_group(held, which, group);
         fill(&shared, which, group);
     };
-    rayon::join(|| build(0, first), || rayon::join(|| build(1, second), || build(2, across)));
+    // This thread takes the side with more constraints, as `drive` does in every pass: each
+    // side's rows are then solved on the core that wrote them, not fetched from the other's.
+    if second.slots.len() > first.slots.len() {
+        rayon::join(|| build(1, second), || rayon::join(|| build(0, first), || build(2, across)));
+    } else {
+        rayon::join(|| build(0, first), || rayon::join(|| build(1, second), || build(2, across)));
+    }
 }
 
 /// Last step's solving order, as `sort_from_last_order` reads it.

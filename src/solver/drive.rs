@@ -104,8 +104,9 @@ fn apply(step: Step, side: &mut [SolverBody], kept: &mut [[Vector; 2]]) {
 
 /// Carries out the plan. Each pass runs over the first side's constraints and the second's,
 /// which share no free body and whose bodies are separate slices, then over the constraints
-/// across. With two threads the two sides run as a rayon join: the pool's other thread, kept
-/// awake through the step (`schedule`), takes the second side at once, and when it is busy or
+/// across. With two threads the two sides run as a rayon join: this thread takes the side with
+/// more constraints, which it built (`build_constraints`), and the pool's other thread, kept
+/// awake through the step (`schedule`), takes the other at once, and when it is busy or
 /// off its core (a machine loaded with other work) this thread runs both sides itself instead
 /// of waiting. On one thread the sides' constraints are one group (`SolveScratch::merged`),
 /// solved over all the bodies at once. Either way the arithmetic is the same, so the result
@@ -117,6 +118,8 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
     let SolveScratch { groups: [first, second, across], bodies, kept, left: cut, merged, .. } = s;
     let (kept_left, kept_right) = kept.split_at_mut(*cut + 1);
     let threaded = !second.batches.is_empty() && rayon::current_num_threads() > 1;
+    // The other thread starts its side a little later: this one takes the longer.
+    let heavier_second = second.slots.len() > first.slots.len();
     // The gaps change only with a move: the first sweep after one works them out for the rest.
     let mut moved = true;
     // The body steps since the last pass (`plan[since..at]`), applied just before the next
@@ -154,7 +157,9 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
                 apply_all(steps, right, kept_right);
                 run(pass, right, second, h, fresh);
             };
-            if threaded {
+            if threaded && heavier_second {
+                rayon::join(right_side, left_side);
+            } else if threaded {
                 rayon::join(left_side, right_side);
             } else {
                 left_side();
