@@ -84,28 +84,31 @@ impl Bodies {
     pub fn load(&mut self, world: &World) {
         let n = world.query::<&ActorIndex>().iter().count();
         self.resize(n);
+        // With other threads, most values are last step's to the bit and are left unwritten:
+        // a line those threads read (or wrote) last step is then not taken back from them.
+        let compare = rayon::current_num_threads() > 1;
         for (entity, index, pose, vel, mass, material, sphere, mesh) in world.query::<Row>().iter() {
             let i = index.0 as usize;
-            self.entity[i] = entity;
+            put(&mut self.entity[i], entity, compare);
             // `integrate` left the rotation and world inverse inertia of the pose it stored:
             // worked out again only where the world's orientation or inertia is not that one.
             let same = self.orientation[i] == pose.orientation && self.inv_inertia_body[i] == mass.inv_inertia;
-            self.position[i] = pose.position;
-            self.orientation[i] = pose.orientation;
-            self.velocity[i] = vel.linear;
-            self.angular_velocity[i] = vel.angular;
-            self.inv_mass[i] = mass.inv_mass;
-            self.inv_inertia_body[i] = mass.inv_inertia;
-            self.principal_moments[i] = mass.principal_moments;
-            self.principal_axes[i] = mass.principal_axes;
+            put(&mut self.position[i], pose.position, compare);
+            put(&mut self.orientation[i], pose.orientation, compare);
+            put(&mut self.velocity[i], vel.linear, compare);
+            put(&mut self.angular_velocity[i], vel.angular, compare);
+            put(&mut self.inv_mass[i], mass.inv_mass, compare);
+            put(&mut self.inv_inertia_body[i], mass.inv_inertia, compare);
+            put(&mut self.principal_moments[i], mass.principal_moments, compare);
+            put(&mut self.principal_axes[i], mass.principal_axes, compare);
             if !same {
                 self.rotation[i] = Mat3::from_quat(pose.orientation);
                 self.inv_inertia_world[i] = rotate_tensor(pose.orientation, mass.inv_inertia);
             }
-            self.radius[i] = sphere.radius;
-            self.mesh[i] = mesh.id;
-            self.restitution[i] = material.restitution;
-            self.friction[i] = material.friction;
+            put(&mut self.radius[i], sphere.radius, compare);
+            put(&mut self.mesh[i], mesh.id, compare);
+            put(&mut self.restitution[i], material.restitution, compare);
+            put(&mut self.friction[i], material.friction, compare);
         }
     }
 
@@ -192,6 +195,55 @@ fn all_finite<T, const K: usize>(items: &[T], parts: impl Fn(&T) -> [Scalar; K])
     chains.iter().flatten().all(|&c| c == 0.0)
 }
 
+/// Writes `value` into `slot`; with `compare`, only if `slot` does not hold those very bits.
+#[inline(always)]
+fn put<T: Bits>(slot: &mut T, value: T, compare: bool) {
+    if !compare || !slot.same_bits(&value) {
+        *slot = value;
+    }
+}
+
+/// Equality to the bit: unlike `==`, −0.0 is not 0.0 and a NaN is itself.
+trait Bits: Copy {
+    fn same_bits(&self, other: &Self) -> bool;
+}
+
+impl Bits for Scalar {
+    fn same_bits(&self, other: &Self) -> bool {
+        self.to_bits() == other.to_bits()
+    }
+}
+
+impl Bits for Vector {
+    fn same_bits(&self, other: &Self) -> bool {
+        self.to_array().map(Scalar::to_bits) == other.to_array().map(Scalar::to_bits)
+    }
+}
+
+impl Bits for Quat {
+    fn same_bits(&self, other: &Self) -> bool {
+        self.to_array().map(Scalar::to_bits) == other.to_array().map(Scalar::to_bits)
+    }
+}
+
+impl Bits for Mat3 {
+    fn same_bits(&self, other: &Self) -> bool {
+        self.to_cols_array().map(Scalar::to_bits) == other.to_cols_array().map(Scalar::to_bits)
+    }
+}
+
+impl Bits for MeshId {
+    fn same_bits(&self, other: &Self) -> bool {
+        self == other
+    }
+}
+
+impl Bits for Entity {
+    fn same_bits(&self, other: &Self) -> bool {
+        self == other
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -257,5 +309,49 @@ mod tests {
         b.load(&world);
         assert_eq!((b.rotation[0], b.inv_inertia_world[0]), fresh(&b));
         assert_ne!(b.inv_inertia_world[0], Mat3::ZERO);
+    }
+
+    #[test]
+    fn loading_in_a_pool_of_two_writes_every_value_that_differs_to_the_bit() {
+        use crate::model::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
+        use crate::model::mesh::ConvexMesh;
+        let mut world = World::new();
+        let actor = world.spawn((
+            ActorIndex(0),
+            Pose { position: Vector::new(0.0, 1.0, 2.0), orientation: Quat::IDENTITY },
+            Velocity { linear: Vector::new(0.0, -3.0, 0.5), angular: Vector::ZERO },
+            MassProps::dynamic(1.0, Mat3::IDENTITY),
+            Material { restitution: 0.0, friction: 0.5 },
+            BoundingSphere { radius: 1.0 },
+            Mesh { id: MeshId(0), shape: std::sync::Arc::new(ConvexMesh::cuboid(Vector::ONE)) },
+        ));
+        let bits = |v: Vector| v.to_array().map(f64::to_bits);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let (mut plain, mut pooled) = (Bodies::default(), Bodies::default());
+        // Edits a one-thread load writes and a comparing load must not skip: 0.0 -> -0.0 (equal
+        // by `==`), a NaN, and a change of mass and friction.
+        let edits: [fn(&mut World, Entity); 3] = [
+            |w, a| w.get::<&mut Pose>(a).unwrap().position.x = -0.0,
+            |w, a| w.get::<&mut Velocity>(a).unwrap().angular.z = f64::NAN,
+            |w, a| {
+                *w.get::<&mut MassProps>(a).unwrap() = MassProps::dynamic(4.0, Mat3::IDENTITY * 2.0);
+                w.get::<&mut Material>(a).unwrap().friction = -0.0;
+            },
+        ];
+        plain.load(&world);
+        pool.install(|| pooled.load(&world));
+        for edit in edits {
+            edit(&mut world, actor);
+            plain.load(&world);
+            pool.install(|| pooled.load(&world));
+            assert_eq!(bits(pooled.position[0]), bits(plain.position[0]));
+            assert_eq!(bits(pooled.angular_velocity[0]), bits(plain.angular_velocity[0]));
+            assert_eq!(pooled.inv_mass[0].to_bits(), plain.inv_mass[0].to_bits());
+            assert_eq!(pooled.friction[0].to_bits(), plain.friction[0].to_bits());
+            assert_eq!(pooled.inv_inertia_body[0], plain.inv_inertia_body[0]);
+        }
+        assert_eq!(pooled.position[0].x.to_bits(), (-0.0_f64).to_bits());
+        assert!(pooled.angular_velocity[0].z.is_nan());
+        assert_eq!(pooled.inv_mass[0], 0.25);
     }
 }
