@@ -115,13 +115,18 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
         place_group(held, which, group);
         fill(&shared, which, group);
     };
-    // This thread takes the side with more constraints, as `drive` does in every pass: each
-    // side's rows are then solved on the core that wrote them, not fetched from the other's.
-    if second.slots.len() > first.slots.len() {
+    if second_side_first(first, second) {
         rayon::join(|| build(1, second), || rayon::join(|| build(0, first), || build(2, across)));
     } else {
         rayon::join(|| build(0, first), || rayon::join(|| build(1, second), || build(2, across)));
     }
+}
+
+/// True when the stepping thread takes the second side, building it here and solving it in
+/// every pass of `drive`: it takes the side with more constraints (the other thread starts a
+/// little later), and the one rule for both keeps each side's rows on the core that wrote them.
+pub(super) fn second_side_first(first: &ConstraintGroup, second: &ConstraintGroup) -> bool {
+    second.slots.len() > first.slots.len()
 }
 
 /// Last step's solving order, as `sort_from_last_order` reads it.

@@ -118,8 +118,7 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
     let SolveScratch { groups: [first, second, across], bodies, kept, left: cut, merged, .. } = s;
     let (kept_left, kept_right) = kept.split_at_mut(*cut + 1);
     let threaded = !second.batches.is_empty() && rayon::current_num_threads() > 1;
-    // The other thread starts its side a little later: this one takes the longer.
-    let heavier_second = second.slots.len() > first.slots.len();
+    let second_first = super::constraints::second_side_first(first, second);
     // The gaps change only with a move: the first sweep after one works them out for the rest.
     let mut moved = true;
     // The body steps since the last pass (`plan[since..at]`), applied just before the next
@@ -157,7 +156,7 @@ pub(crate) fn drive(s: &mut SolveScratch, plan: &[Step], h: Scalar, joints: &mut
                 apply_all(steps, right, kept_right);
                 run(pass, right, second, h, fresh);
             };
-            if threaded && heavier_second {
+            if threaded && second_first {
                 rayon::join(right_side, left_side);
             } else if threaded {
                 rayon::join(left_side, right_side);
