@@ -58,9 +58,8 @@ pub fn solve(_world: &mut World, ctx: &mut StepContext) {
     let resting = |p: &Pair| rule(b.pair_friction(p.a as usize, p.b as usize));
     let s = ctx.scratch.get_mut::<SolveScratch>();
     s.step = ctx.step;
-    s.pairs.clear();
     let open = |p: &Pair| p.contact().is_some() || p.is_candidate() || p.is_near();
-    s.pairs.extend(ctx.pairs.iter().filter(|p| open(p) && resting(p)).copied());
+    copy_pairs(&ctx.pairs, &mut s.pairs, |p| open(p) && resting(p));
     // Joints run the substeps even with no contact to hold (and without gravity).
     let mut joints = match ctx.scratch.get::<Joints>() {
         Some(j) if !j.joints.is_empty() => std::mem::take(ctx.scratch.get_mut::<Joints>()),
@@ -92,6 +91,24 @@ pub fn solve(_world: &mut World, ctx: &mut StepContext) {
     if !joints.joints.is_empty() {
         *ctx.scratch.get_mut::<Joints>() = joints;
     }
+}
+
+/// The pairs of `pairs` that `wanted` takes, in order, into `out`. With other threads and
+/// every pair wanted (a pile under gravity), the two halves are copied at once, each by the
+/// thread that `find_manifolds` next gives it, so the stores go to lines its core wrote last
+/// step instead of taking them back from the other core (BENCH.md, session 35).
+fn copy_pairs(pairs: &[Pair], out: &mut Vec<Pair>, wanted: impl Fn(&Pair) -> bool + Sync) {
+    if rayon::current_num_threads() == 1 || !pairs.par_iter().all(&wanted) {
+        out.clear();
+        out.extend(pairs.iter().filter(|p| wanted(p)).copied());
+        return;
+    }
+    // Only a longer list than last step's is extended here; the rest is overwritten in place.
+    let kept = out.len().min(pairs.len());
+    out.truncate(kept);
+    out.extend_from_slice(&pairs[kept..]);
+    let half = kept.div_ceil(2).max(1);
+    out[..kept].par_chunks_mut(half).zip(pairs[..kept].par_chunks(half)).for_each(|(o, p)| o.copy_from_slice(p));
 }
 
 /// Each pair's manifold: recycled from the previous step when the two bodies have hardly
@@ -469,6 +486,31 @@ mod tests {
     fn turn(rng: &mut crate::rng::SplitMix64) -> Quat {
         let v = Vector::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
         Quat::from_axis_angle(v.normalize_or(Vector::X), rng.uniform(-3.0, 3.0))
+    }
+
+    /// In a pool of two, lists that grow, shrink and keep their length, all wanted or not: the
+    /// copy is the plain filtered one, pair for pair.
+    #[test]
+    fn pairs_copied_in_a_pool_of_two_are_the_filtered_pairs_in_order() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let list = |n: u32, seed: u32| -> Vec<Pair> {
+            (0..n)
+                .map(|k| Pair {
+                    state: if (k + seed).is_multiple_of(7) { PairState::Near } else { PairState::Candidate },
+                    ..Pair::candidate(k, k + 1 + seed)
+                })
+                .collect()
+        };
+        let mut out = Vec::new();
+        for (n, seed) in [(0, 0), (5, 1), (3000, 2), (3000, 3), (1200, 4), (4001, 5), (1, 6), (2, 7)] {
+            let pairs = list(n, seed);
+            let wants: [&(dyn Fn(&Pair) -> bool + Sync); 2] = [&|_| true, &|p| !p.is_near()];
+            for wanted in wants {
+                pool.install(|| copy_pairs(&pairs, &mut out, wanted));
+                let plain: Vec<Pair> = pairs.iter().filter(|p| wanted(p)).copied().collect();
+                assert_eq!(out, plain, "{n} pairs");
+            }
+        }
     }
 
     #[test]
