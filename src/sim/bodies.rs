@@ -83,32 +83,41 @@ impl Bodies {
     /// indices must be `0..n` (the `Sim` guarantees it).
     pub fn load(&mut self, world: &World) {
         let n = world.query::<&ActorIndex>().iter().count();
-        self.resize(n);
         // With other threads, most values are last step's to the bit and are left unwritten:
         // a line those threads read (or wrote) last step is then not taken back from them.
         let compare = rayon::current_num_threads() > 1;
+        // And each part of the rows is read on a thread of its own, by the entities they held
+        // last step, as `integrate` split them: a row is mostly read where it was last written.
+        if compare && n == self.len() && n >= 2 * LOAD_CHUNK && load_part(world, self.rows(), 0) {
+            return;
+        }
+        self.resize(n);
+        let mut rows = self.rows();
         for (entity, index, pose, vel, mass, material, sphere, mesh) in world.query::<Row>().iter() {
             let i = index.0 as usize;
-            put(&mut self.entity[i], entity, compare);
-            // `integrate` left the rotation and world inverse inertia of the pose it stored:
-            // worked out again only where the world's orientation or inertia is not that one.
-            let same = self.orientation[i] == pose.orientation && self.inv_inertia_body[i] == mass.inv_inertia;
-            put(&mut self.position[i], pose.position, compare);
-            put(&mut self.orientation[i], pose.orientation, compare);
-            put(&mut self.velocity[i], vel.linear, compare);
-            put(&mut self.angular_velocity[i], vel.angular, compare);
-            put(&mut self.inv_mass[i], mass.inv_mass, compare);
-            put(&mut self.inv_inertia_body[i], mass.inv_inertia, compare);
-            put(&mut self.principal_moments[i], mass.principal_moments, compare);
-            put(&mut self.principal_axes[i], mass.principal_axes, compare);
-            if !same {
-                self.rotation[i] = Mat3::from_quat(pose.orientation);
-                self.inv_inertia_world[i] = rotate_tensor(pose.orientation, mass.inv_inertia);
-            }
-            put(&mut self.radius[i], sphere.radius, compare);
-            put(&mut self.mesh[i], mesh.id, compare);
-            put(&mut self.restitution[i], material.restitution, compare);
-            put(&mut self.friction[i], material.friction, compare);
+            put(&mut rows.entity[i], entity, compare);
+            rows.put(i, (pose, vel, mass, material, sphere, mesh), compare);
+        }
+    }
+
+    /// Every array, as one set of slices (`RowsMut`).
+    fn rows(&mut self) -> RowsMut<'_> {
+        RowsMut {
+            entity: &mut self.entity,
+            position: &mut self.position,
+            orientation: &mut self.orientation,
+            rotation: &mut self.rotation,
+            velocity: &mut self.velocity,
+            angular_velocity: &mut self.angular_velocity,
+            inv_mass: &mut self.inv_mass,
+            principal_moments: &mut self.principal_moments,
+            principal_axes: &mut self.principal_axes,
+            inv_inertia_body: &mut self.inv_inertia_body,
+            inv_inertia_world: &mut self.inv_inertia_world,
+            radius: &mut self.radius,
+            mesh: &mut self.mesh,
+            restitution: &mut self.restitution,
+            friction: &mut self.friction,
         }
     }
 
@@ -162,6 +171,108 @@ impl Bodies {
         self.mesh.resize(n, MeshId(0));
         self.restitution.resize(n, 0.0);
         self.friction.resize(n, 0.0);
+    }
+}
+
+/// Fewest rows a thread loads on its own (`load_part`).
+const LOAD_CHUNK: usize = 256;
+
+/// Loads `rows` (row `first` onwards) from the world, by the entity each row held: in halves
+/// on two threads down to `LOAD_CHUNK` rows. False if some row's entity is gone or is no longer
+/// that row's actor (then `load` reads the world afresh; the rows written so far hold their
+/// actors' values, as a full load would leave them).
+fn load_part(world: &World, mut rows: RowsMut, first: usize) -> bool {
+    let len = rows.entity.len();
+    if len >= 2 * LOAD_CHUNK {
+        let (low, high) = rows.split_at(len / 2);
+        let (a, b) = rayon::join(|| load_part(world, low, first), || load_part(world, high, first + len / 2));
+        return a && b;
+    }
+    let view = world.view::<Row>();
+    for k in 0..len {
+        match view.get(rows.entity[k]) {
+            Some((_, index, pose, vel, mass, material, sphere, mesh)) if index.0 as usize == first + k => {
+                rows.put(k, (pose, vel, mass, material, sphere, mesh), true);
+            }
+            _ => return false,
+        }
+    }
+    true
+}
+
+/// The arrays of a run of rows, to load them (`Bodies::load`).
+struct RowsMut<'a> {
+    entity: &'a mut [Entity],
+    position: &'a mut [Vector],
+    orientation: &'a mut [Quat],
+    rotation: &'a mut [Mat3],
+    velocity: &'a mut [Vector],
+    angular_velocity: &'a mut [Vector],
+    inv_mass: &'a mut [Scalar],
+    principal_moments: &'a mut [Vector],
+    principal_axes: &'a mut [Quat],
+    inv_inertia_body: &'a mut [Mat3],
+    inv_inertia_world: &'a mut [Mat3],
+    radius: &'a mut [Scalar],
+    mesh: &'a mut [MeshId],
+    restitution: &'a mut [Scalar],
+    friction: &'a mut [Scalar],
+}
+
+/// A row's components, but its entity and actor index.
+type RowValues<'a> = (&'a Pose, &'a Velocity, &'a MassProps, &'a Material, &'a BoundingSphere, &'a Mesh);
+
+impl RowsMut<'_> {
+    /// Rows `..mid` and `mid..`.
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        // Every field split alike; the struct literals name each, so none can be left out.
+        macro_rules! split {
+            ($($field:ident),*) => {{
+                let RowsMut { $($field),* } = self;
+                $(let $field = $field.split_at_mut(mid);)*
+                (RowsMut { $($field: $field.0),* }, RowsMut { $($field: $field.1),* })
+            }};
+        }
+        split!(
+            entity,
+            position,
+            orientation,
+            rotation,
+            velocity,
+            angular_velocity,
+            inv_mass,
+            principal_moments,
+            principal_axes,
+            inv_inertia_body,
+            inv_inertia_world,
+            radius,
+            mesh,
+            restitution,
+            friction
+        )
+    }
+
+    /// Row `i` from its actor's components (`put` with `compare`).
+    fn put(&mut self, i: usize, (pose, vel, mass, material, sphere, mesh): RowValues, compare: bool) {
+        // `integrate` left the rotation and world inverse inertia of the pose it stored:
+        // worked out again only where the world's orientation or inertia is not that one.
+        let same = self.orientation[i] == pose.orientation && self.inv_inertia_body[i] == mass.inv_inertia;
+        put(&mut self.position[i], pose.position, compare);
+        put(&mut self.orientation[i], pose.orientation, compare);
+        put(&mut self.velocity[i], vel.linear, compare);
+        put(&mut self.angular_velocity[i], vel.angular, compare);
+        put(&mut self.inv_mass[i], mass.inv_mass, compare);
+        put(&mut self.inv_inertia_body[i], mass.inv_inertia, compare);
+        put(&mut self.principal_moments[i], mass.principal_moments, compare);
+        put(&mut self.principal_axes[i], mass.principal_axes, compare);
+        if !same {
+            self.rotation[i] = Mat3::from_quat(pose.orientation);
+            self.inv_inertia_world[i] = rotate_tensor(pose.orientation, mass.inv_inertia);
+        }
+        put(&mut self.radius[i], sphere.radius, compare);
+        put(&mut self.mesh[i], mesh.id, compare);
+        put(&mut self.restitution[i], material.restitution, compare);
+        put(&mut self.friction[i], material.friction, compare);
     }
 }
 
@@ -309,6 +420,89 @@ mod tests {
         b.load(&world);
         assert_eq!((b.rotation[0], b.inv_inertia_world[0]), fresh(&b));
         assert_ne!(b.inv_inertia_world[0], Mat3::ZERO);
+    }
+
+    /// Every value of every row, as bits (entities as their ids).
+    fn all_bits(b: &Bodies) -> Vec<u64> {
+        let mut out = Vec::new();
+        for i in 0..b.len() {
+            out.push(b.entity[i].to_bits().get());
+            for v in [b.position[i], b.velocity[i], b.angular_velocity[i], b.principal_moments[i]] {
+                out.extend(v.to_array().map(f64::to_bits));
+            }
+            for q in [b.orientation[i], b.principal_axes[i]] {
+                out.extend(q.to_array().map(f64::to_bits));
+            }
+            for m in [b.rotation[i], b.inv_inertia_body[i], b.inv_inertia_world[i]] {
+                out.extend(m.to_cols_array().map(f64::to_bits));
+            }
+            out.extend([b.inv_mass[i], b.radius[i], b.restitution[i], b.friction[i]].map(f64::to_bits));
+            out.push(u64::from(b.mesh[i].0));
+        }
+        out
+    }
+
+    /// 700 actors loaded by rows on two threads (`load_part`) and by a plain one-thread load
+    /// agree to the bit through edits in both halves of the rows, an actor respawned under its
+    /// index (a new entity: the rows are read afresh) and one despawned (fewer actors).
+    #[test]
+    fn many_rows_loaded_in_a_pool_of_two_match_a_plain_load() {
+        use crate::model::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
+        use crate::model::mesh::ConvexMesh;
+        let shape = std::sync::Arc::new(ConvexMesh::cuboid(Vector::ONE));
+        let actor = |i: u32| {
+            let x = f64::from(i);
+            (
+                ActorIndex(i),
+                Pose { position: Vector::new(x, 0.5 * x, -x), orientation: Quat::from_rotation_y(0.01 * x) },
+                Velocity { linear: Vector::new(0.0, -x, 1.0), angular: Vector::new(0.1 * x, 0.0, 0.0) },
+                MassProps::dynamic(1.0 + x, Mat3::from_diagonal(Vector::new(1.0, 2.0, 3.0 + x))),
+                Material { restitution: 0.1, friction: 0.5 },
+                BoundingSphere { radius: 1.0 },
+                Mesh { id: MeshId(i % 3), shape: shape.clone() },
+            )
+        };
+        let mut world = World::new();
+        let entities: Vec<Entity> = (0..700).map(|i| world.spawn(actor(i))).collect();
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let (mut plain, mut pooled) = (Bodies::default(), Bodies::default());
+        let mut check = |world: &World, what: &str| {
+            one.install(|| plain.load(world));
+            two.install(|| pooled.load(world));
+            assert_eq!(all_bits(&pooled), all_bits(&plain), "{what}");
+        };
+        // Whether the rows alone (the parallel form) load the world as it stands.
+        let by_rows = |world: &World| {
+            let mut b = Bodies::default();
+            one.install(|| b.load(world));
+            two.install(|| load_part(world, b.rows(), 0))
+        };
+        check(&world, "first load");
+        check(&world, "unchanged");
+        assert!(by_rows(&world));
+        for &row in &[3, 340, 351, 699] {
+            let e = entities[row];
+            world.get::<&mut Pose>(e).unwrap().position.y = -0.0;
+            world.get::<&mut Pose>(e).unwrap().orientation = Quat::from_rotation_x(0.3);
+            world.get::<&mut Velocity>(e).unwrap().angular.z = f64::NAN;
+            *world.get::<&mut MassProps>(e).unwrap() = MassProps::dynamic(9.0, Mat3::IDENTITY * 2.0);
+            world.get::<&mut Material>(e).unwrap().friction = 0.25;
+        }
+        check(&world, "edits in both halves");
+        let mut stale = Bodies::default();
+        one.install(|| stale.load(&world));
+        world.despawn(entities[500]).unwrap();
+        let mut respawned = actor(500);
+        respawned.1.position = Vector::splat(7.0);
+        world.spawn(respawned);
+        check(&world, "a respawned actor");
+        // Row 500's entity is gone: the rows alone cannot load this world.
+        assert!(!two.install(|| load_part(&world, stale.rows(), 0)));
+        assert!(by_rows(&world));
+        world.despawn(entities[699]).unwrap();
+        check(&world, "one actor fewer");
+        assert_eq!((plain.len(), plain.position[500]), (699, Vector::splat(7.0)));
     }
 
     #[test]
