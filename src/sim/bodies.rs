@@ -184,8 +184,9 @@ const LOAD_CHUNK: usize = 256;
 fn load_part(world: &World, mut rows: RowsMut, first: usize) -> bool {
     let len = rows.entity.len();
     if len >= 2 * LOAD_CHUNK {
-        let (low, high) = rows.split_at(len / 2);
-        let (a, b) = rayon::join(|| load_part(world, low, first), || load_part(world, high, first + len / 2));
+        let mid = len / 2;
+        let (low, high) = rows.split_at(mid);
+        let (a, b) = rayon::join(|| load_part(world, low, first), || load_part(world, high, first + mid));
         return a && b;
     }
     let view = world.view::<Row>();
@@ -422,6 +423,22 @@ mod tests {
         assert_ne!(b.inv_inertia_world[0], Mat3::ZERO);
     }
 
+    /// Actor `i`'s components, its values made from `i` (row 0: position (0, 0, -0), so a
+    /// position of -0.0 along x is an edit `==` cannot see).
+    fn actor(i: u32, shape: &std::sync::Arc<crate::model::mesh::ConvexMesh>) -> impl hecs::DynamicBundle {
+        use crate::model::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
+        let x = f64::from(i);
+        (
+            ActorIndex(i),
+            Pose { position: Vector::new(x, 0.5 * x, -x), orientation: Quat::from_rotation_y(0.01 * x) },
+            Velocity { linear: Vector::new(0.0, -x, 1.0), angular: Vector::new(0.1 * x, 0.0, 0.0) },
+            MassProps::dynamic(1.0 + x, Mat3::from_diagonal(Vector::new(1.0, 2.0, 3.0 + x))),
+            Material { restitution: 0.1, friction: 0.5 },
+            BoundingSphere { radius: 1.0 },
+            Mesh { id: MeshId(i % 3), shape: shape.clone() },
+        )
+    }
+
     /// Every value of every row, as bits (entities as their ids).
     fn all_bits(b: &Bodies) -> Vec<u64> {
         let mut out = Vec::new();
@@ -447,23 +464,10 @@ mod tests {
     /// index (a new entity: the rows are read afresh) and one despawned (fewer actors).
     #[test]
     fn many_rows_loaded_in_a_pool_of_two_match_a_plain_load() {
-        use crate::model::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
-        use crate::model::mesh::ConvexMesh;
-        let shape = std::sync::Arc::new(ConvexMesh::cuboid(Vector::ONE));
-        let actor = |i: u32| {
-            let x = f64::from(i);
-            (
-                ActorIndex(i),
-                Pose { position: Vector::new(x, 0.5 * x, -x), orientation: Quat::from_rotation_y(0.01 * x) },
-                Velocity { linear: Vector::new(0.0, -x, 1.0), angular: Vector::new(0.1 * x, 0.0, 0.0) },
-                MassProps::dynamic(1.0 + x, Mat3::from_diagonal(Vector::new(1.0, 2.0, 3.0 + x))),
-                Material { restitution: 0.1, friction: 0.5 },
-                BoundingSphere { radius: 1.0 },
-                Mesh { id: MeshId(i % 3), shape: shape.clone() },
-            )
-        };
+        use crate::model::components::{MassProps, Material, Pose, Velocity};
+        let shape = std::sync::Arc::new(crate::model::mesh::ConvexMesh::cuboid(Vector::ONE));
         let mut world = World::new();
-        let entities: Vec<Entity> = (0..700).map(|i| world.spawn(actor(i))).collect();
+        let entities: Vec<Entity> = (0..700).map(|i| world.spawn(actor(i, &shape))).collect();
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let (mut plain, mut pooled) = (Bodies::default(), Bodies::default());
@@ -493,9 +497,8 @@ mod tests {
         let mut stale = Bodies::default();
         one.install(|| stale.load(&world));
         world.despawn(entities[500]).unwrap();
-        let mut respawned = actor(500);
-        respawned.1.position = Vector::splat(7.0);
-        world.spawn(respawned);
+        let respawned = world.spawn(actor(500, &shape));
+        world.get::<&mut Pose>(respawned).unwrap().position = Vector::splat(7.0);
         check(&world, "a respawned actor");
         // Row 500's entity is gone: the rows alone cannot load this world.
         assert!(!two.install(|| load_part(&world, stale.rows(), 0)));
@@ -507,19 +510,12 @@ mod tests {
 
     #[test]
     fn loading_in_a_pool_of_two_writes_every_value_that_differs_to_the_bit() {
-        use crate::model::components::{ActorIndex, BoundingSphere, MassProps, Material, Mesh, Pose, Velocity};
-        use crate::model::mesh::ConvexMesh;
+        use crate::model::components::{MassProps, Material, Pose, Velocity};
         let mut world = World::new();
-        let actor = world.spawn((
-            ActorIndex(0),
-            Pose { position: Vector::new(0.0, 1.0, 2.0), orientation: Quat::IDENTITY },
-            Velocity { linear: Vector::new(0.0, -3.0, 0.5), angular: Vector::ZERO },
-            MassProps::dynamic(1.0, Mat3::IDENTITY),
-            Material { restitution: 0.0, friction: 0.5 },
-            BoundingSphere { radius: 1.0 },
-            Mesh { id: MeshId(0), shape: std::sync::Arc::new(ConvexMesh::cuboid(Vector::ONE)) },
-        ));
+        let actor = world.spawn(actor(0, &std::sync::Arc::new(crate::model::mesh::ConvexMesh::cuboid(Vector::ONE))));
         let bits = |v: Vector| v.to_array().map(f64::to_bits);
+        // The plain load on a pool of one: outside a pool the global pool may have more threads.
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let (mut plain, mut pooled) = (Bodies::default(), Bodies::default());
         // Edits a one-thread load writes and a comparing load must not skip: 0.0 -> -0.0 (equal
@@ -532,11 +528,11 @@ mod tests {
                 w.get::<&mut Material>(a).unwrap().friction = -0.0;
             },
         ];
-        plain.load(&world);
+        one.install(|| plain.load(&world));
         pool.install(|| pooled.load(&world));
         for edit in edits {
             edit(&mut world, actor);
-            plain.load(&world);
+            one.install(|| plain.load(&world));
             pool.install(|| pooled.load(&world));
             assert_eq!(bits(pooled.position[0]), bits(plain.position[0]));
             assert_eq!(bits(pooled.angular_velocity[0]), bits(plain.angular_velocity[0]));
