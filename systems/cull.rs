@@ -463,16 +463,19 @@ impl PairCache {
         }
         let rows = &bounds.rows[..];
         // Each part's buffer keeps its length from step to step (no clearing, no zeroing);
-        // the count says how much of it passed.
+        // the count says how much of it passed. The count is kept in a local until the end:
+        // the parts' counts share a cache line, which two threads writing at every pair
+        // passed back and forth (BENCH.md, session 36).
         self.pairs.par_chunks(size).zip(passed[..count].par_iter_mut()).for_each(|(pairs, (n, kept))| {
             if kept.len() < pairs.len() {
                 kept.resize(pairs.len(), (0, 0));
             }
-            *n = 0;
+            let (kept, mut met) = (&mut kept[..pairs.len()], 0);
             for &(i, j) in pairs {
-                kept[*n] = (i, j);
-                *n += usize::from(rows[i as usize].candidates(&rows[j as usize]));
+                kept[met] = (i, j);
+                met += usize::from(rows[i as usize].candidates(&rows[j as usize]));
             }
+            *n = met;
         });
         for (n, kept) in &passed[..count] {
             out.extend(kept[..*n].iter().map(|&(i, j)| Pair::candidate(i, j)));
