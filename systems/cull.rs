@@ -394,19 +394,20 @@ impl PairCache {
             }
         }
         self.fresh.sort_unstable();
+        // The old pairs without the moved bodies' merged with the fresh ones (no pair is in
+        // both: each fresh pair has a moved body). The few fresh pairs are placed by binary
+        // search, and the old pairs between them copied in runs.
         let (old, mark) = (std::mem::take(&mut self.pairs), &self.mark);
-        let mut kept = old.iter().copied().filter(|&(a, c)| !mark[a as usize] && !mark[c as usize]).peekable();
-        let mut fresh = self.fresh.iter().copied().peekable();
+        let kept = |&(a, c): &(u32, u32)| !mark[a as usize] && !mark[c as usize];
         self.spare.clear();
-        loop {
-            let next = match (kept.peek(), fresh.peek()) {
-                (Some(x), Some(y)) if x < y => kept.next(),
-                (Some(_), Some(_)) | (None, Some(_)) => fresh.next(),
-                (Some(_), None) => kept.next(),
-                (None, None) => break,
-            };
-            self.spare.extend(next);
+        let mut rest = &old[..];
+        for &pair in &self.fresh {
+            let before = rest.partition_point(|&p| p < pair);
+            self.spare.extend(rest[..before].iter().filter(|p| kept(p)));
+            self.spare.push(pair);
+            rest = &rest[before..];
         }
+        self.spare.extend(rest.iter().filter(|p| kept(p)));
         self.pairs = std::mem::replace(&mut self.spare, old);
         for &k in &self.moved {
             self.mark[k as usize] = false;
