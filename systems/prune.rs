@@ -239,20 +239,26 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
-    // A resting pile of small meshes: each pair kept its points or was proved apart, and none
-    // has a GJK record to carry over, so nothing is left to pose or prove.
-    let scratch = ctx.scratch.get_mut::<PruneScratch>();
-    if scratch.starts.is_empty() && !ctx.pairs.iter().any(Pair::is_candidate) {
-        touching.clear();
-        (scratch.speculative, scratch.touching) = (speculative, touching);
-        return;
-    }
     // Small meshes are posed whole; many-faced ones are left unposed (`Placed`): their GJK and
     // bounds walk the body-frame vertices, and the tests and `solve` pose only the bodies of
     // the pairs they take (a recycled pair's need none).
     let (meshes, b) = (&ctx.meshes, &ctx.bodies);
     let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
+    let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
+    // Boxes only (a rain of cubes; a pile at rest, whose pairs all kept their points or were
+    // proved apart): each candidate left was classified by the box pass above, and none has
+    // a GJK record to carry over, so nothing is left to prove; only the candidates' bodies to
+    // pose for the tests, if any.
+    let scratch = ctx.scratch.get_mut::<PruneScratch>();
+    if scratch.starts.is_empty() && !ctx.pairs.iter().any(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))) {
+        if ctx.pairs.iter().any(Pair::is_candidate) {
+            ctx.posed.pose(b, candidates);
+        }
+        touching.clear();
+        (scratch.speculative, scratch.touching) = (speculative, touching);
+        return;
+    }
     ctx.posed.pose(b, candidates.clone().filter(|&i| !many(i)));
     let PruneScratch { wanted, bounds, hints, starts, next, starts_out, cached, resting, .. } =
         ctx.scratch.get_mut::<PruneScratch>();
@@ -278,7 +284,6 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let (posed, params) = (&ctx.posed, &ctx.params);
     let margin =
         |p: &Pair| pair_margin(p, b, b.thinner(meshes, p.a as usize, p.b as usize), params, (may_rest, &speculative));
-    let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
     let shape = |i: u32| if many(i) { Shape::Placed(placed(i as usize)) } else { Shape::Posed(posed.get(i)) };
     let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };
     let old = |e: u32| starts.get(e as usize).map(|s| &s.1);
