@@ -248,13 +248,10 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
     // Boxes only (a rain of cubes; a pile at rest, whose pairs all kept their points or were
     // proved apart): each candidate left was classified by the box pass above, and none has
-    // a GJK record to carry over, so nothing is left to prove; only the candidates' bodies to
-    // pose for the tests, if any.
+    // a GJK record to carry over, so nothing is left to pose or prove (the tests pose the
+    // bodies they take).
     let scratch = ctx.scratch.get_mut::<PruneScratch>();
     if scratch.starts.is_empty() && !ctx.pairs.iter().any(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))) {
-        if ctx.pairs.iter().any(Pair::is_candidate) {
-            ctx.posed.pose(b, candidates);
-        }
         touching.clear();
         (scratch.speculative, scratch.touching) = (speculative, touching);
         return;
