@@ -239,13 +239,9 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         }
     });
     ctx.pairs.retain(|p| p.state != PairState::Separated);
-    // Small meshes are posed whole; many-faced ones are left unposed (`Placed`): their GJK and
-    // bounds walk the body-frame vertices, and the tests and `solve` pose only the bodies of
-    // the pairs they take (a recycled pair's need none).
     let (meshes, b) = (&ctx.meshes, &ctx.bodies);
     let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
-    let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
     // Boxes only (a rain of cubes; a pile at rest, whose pairs all kept their points or were
     // proved apart): each candidate left was classified by the box pass above, and none has
     // a GJK record to carry over, so nothing is left to pose or prove (the tests pose the
@@ -256,6 +252,10 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
         (scratch.speculative, scratch.touching) = (speculative, touching);
         return;
     }
+    // Small meshes are posed whole; many-faced ones are left unposed (`Placed`): their GJK and
+    // bounds walk the body-frame vertices, and the tests and `solve` pose only the bodies of
+    // the pairs they take (a recycled pair's need none).
+    let candidates = ctx.pairs.iter().filter(|p| p.is_candidate()).flat_map(|p| [p.a, p.b]);
     ctx.posed.pose(b, candidates.clone().filter(|&i| !many(i)));
     let PruneScratch { wanted, bounds, hints, starts, next, starts_out, cached, resting, .. } =
         ctx.scratch.get_mut::<PruneScratch>();
