@@ -242,12 +242,14 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let (meshes, b) = (&ctx.meshes, &ctx.bodies);
     let many = |i: u32| meshes.get(b.mesh[i as usize]).is_many_faced();
     let is_box = |i: u32| meshes.get(b.mesh[i as usize]).box_half_extents.is_some();
+    // A candidate the box pass above did not classify: one of its bodies is not a box.
+    let unproved = |p: &Pair| p.is_candidate() && !(is_box(p.a) && is_box(p.b));
     // Boxes only (a rain of cubes; a pile at rest, whose pairs all kept their points or were
     // proved apart): each candidate left was classified by the box pass above, and none has
     // a GJK record to carry over, so nothing is left to pose or prove (the tests pose the
     // bodies they take).
     let scratch = ctx.scratch.get_mut::<PruneScratch>();
-    if scratch.starts.is_empty() && !ctx.pairs.iter().any(|p| p.is_candidate() && !(is_box(p.a) && is_box(p.b))) {
+    if scratch.starts.is_empty() && !ctx.pairs.iter().any(unproved) {
         touching.clear();
         (scratch.speculative, scratch.touching) = (speculative, touching);
         return;
@@ -285,7 +287,7 @@ pub fn prune(_world: &mut World, ctx: &mut StepContext) {
     let bounds_of = |i: u32| if many(i) { bounds[i as usize] } else { posed.get(i).bounds };
     let old = |e: u32| starts.get(e as usize).map(|s| &s.1);
     let rows = ctx.pairs.par_iter_mut().zip(cached.par_iter().zip(starts_out.par_iter_mut())).zip(resting.par_iter());
-    let rows = rows.filter(|((p, _), _)| p.is_candidate() && !(is_box(p.a) && is_box(p.b)));
+    let rows = rows.filter(|((p, _), _)| unproved(p));
     rows.for_each(|((pair, (&entry, out)), &resting)| {
         let kept = old(entry);
         let (ia, ib) = (pair.a, pair.b);
