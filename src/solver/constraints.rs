@@ -12,7 +12,6 @@ use crate::math::{Mat3, Scalar, Vector, total_order_key};
 use crate::sim::bodies::Bodies;
 use crate::sim::context::StepContext;
 use crate::solver::{CachedManifold, ConstraintGroup, ContactAnchors, HeldPair, PairEnds, SolveScratch, WarmStart};
-use rayon::prelude::*;
 
 /// Fastest push out of a penetration [m/s] (Box2D v3's and rapier's 3 m/s): faster, a cube
 /// squeezed into a pile is shot out of it.
@@ -67,8 +66,8 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     let SolveScratch { order, by_pair, cached, cache, ranked, unranked, .. } = s;
     let last = Ranks { by_pair, cached, entries: cache.len() };
     let held = order.len();
-    let SolveScratch { ends, jointed, slot, moving, keys, left, scale, bodies, .. } = s;
-    let parts = BodyParts { ends, held, jointed, slot, moving, keys, left, scale, bodies };
+    let SolveScratch { ends, jointed, slot, moving, fixed, keys, left, scale, bodies, .. } = s;
+    let parts = BodyParts { ends, held, jointed, slot, moving, fixed, keys, left, scale, bodies };
     rayon::join(|| sort_from_last_order(order, &last, ranked, unranked), || gather_bodies(b, parts));
     // Each constraint's group: within the first side, within the second, or across; then its
     // batches, each group placed on its own. One thread solves the sides one after the other:
@@ -351,6 +350,7 @@ struct BodyParts<'a> {
     jointed: &'a [u32],
     slot: &'a mut Vec<u32>,
     moving: &'a mut Vec<u32>,
+    fixed: &'a mut Vec<u32>,
     keys: &'a mut Vec<(u64, u32)>,
     left: &'a mut usize,
     scale: &'a mut Vec<Mat3>,
@@ -369,24 +369,26 @@ const SPLIT_MIN: usize = 256;
 /// Every fixed body maps to a static slot. The split depends on the scene only, never on the
 /// thread count, so runs are the same on one thread or two.
 fn gather_bodies(b: &Bodies, parts: BodyParts) {
-    let BodyParts { ends, held, jointed, slot, moving, keys, left, scale, bodies } = parts;
-    for &i in moving.iter() {
+    let BodyParts { ends, held, jointed, slot, moving, fixed, keys, left, scale, bodies } = parts;
+    // Last step's bodies let go, so that every slot is unmarked.
+    for &i in moving.iter().chain(fixed.iter()) {
         slot[i as usize] = u32::MAX;
     }
     slot.resize(b.len(), u32::MAX);
     moving.clear();
-    // Each free end of the held pairs once, marked in `slot` (a body fixed last step, asleep
-    // say, may still hold the static slot there, so the mark is a value no slot takes). Their
-    // numbering changes no result (constraints are placed and solved by which bodies they
-    // share, never by their numbers), so it is the order they come in, pair order, and the
-    // solving order is sorted meanwhile.
+    fixed.clear();
+    // Each end of the held pairs once, marked in `slot` (values no slot takes) on first sight.
+    // Their numbering changes no result (constraints are placed and solved by which bodies
+    // they share, never by their numbers), so it is the order they come in, pair order, and
+    // the solving order is sorted meanwhile.
     const MARKED: u32 = u32::MAX - 1;
     // The joints' bodies after the contacts' (none in a scene without joints).
     let held_ends = ends.iter().filter(|e| e.len > 0).flat_map(|e| [e.a, e.b]);
     for i in held_ends.chain(jointed.iter().copied()) {
-        if !b.is_fixed(i as usize) && slot[i as usize] != MARKED {
-            slot[i as usize] = MARKED;
-            moving.push(i);
+        let mark = &mut slot[i as usize];
+        if *mark == u32::MAX {
+            *mark = MARKED;
+            if b.is_fixed(i as usize) { fixed.push(i) } else { moving.push(i) }
         }
     }
     *left = moving.len();
@@ -411,10 +413,8 @@ fn gather_bodies(b: &Bodies, parts: BodyParts) {
     for (k, &i) in moving.iter().enumerate() {
         slot[i as usize] = if (k as u32) < cut { k as u32 } else { k as u32 + 1 };
     }
-    for i in ends.iter().flat_map(|e| [e.a, e.b]).chain(jointed.iter().copied()) {
-        if b.is_fixed(i as usize) {
-            slot[i as usize] = last;
-        }
+    for &i in fixed.iter() {
+        slot[i as usize] = last;
     }
     // S and S⁻¹; for equal principal moments (cubes, spheres) multiples of the identity,
     // whatever the orientation.
@@ -430,15 +430,23 @@ fn gather_bodies(b: &Bodies, parts: BodyParts) {
         let s = |d: Vector| r * Mat3::from_diagonal(d) * r.transpose();
         (s(m.map(|m| 1.0 / m.sqrt())), s(m.map(Scalar::sqrt)))
     };
-    // Each side's bodies, then its static slot; in parallel (a square root or three a body).
-    let body = |&i: &u32| {
-        let (i, (scale, unscale)) = (i as usize, scales(i as usize));
-        (SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() }, scale)
+    // Each side's bodies, then its static slot; the sides at once (a square root or three a
+    // body).
+    let n = moving.len() + 2;
+    bodies.resize(n, SolverBody::default());
+    scale.resize(n, Mat3::ZERO);
+    let side = |ids: &[u32], bodies: &mut [SolverBody], scale: &mut [Mat3]| {
+        for ((&i, out), s) in ids.iter().zip(bodies.iter_mut()).zip(scale.iter_mut()) {
+            let (i, (scale, unscale)) = (i as usize, scales(i as usize));
+            *out = SolverBody { v: b.velocity[i], w: unscale * b.angular_velocity[i], ..SolverBody::default() };
+            *s = scale;
+        }
+        (bodies[ids.len()], scale[ids.len()]) = (SolverBody::default(), Mat3::ZERO);
     };
-    let static_slot = || rayon::iter::once((SolverBody::default(), Mat3::ZERO));
     let (first, second) = moving.split_at(*left);
-    let sides = first.par_iter().map(body).chain(static_slot()).chain(second.par_iter().map(body));
-    sides.chain(static_slot()).unzip_into_vecs(bodies, scale);
+    let (bodies_first, bodies_second) = bodies.split_at_mut(*left + 1);
+    let (scale_first, scale_second) = scale.split_at_mut(*left + 1);
+    rayon::join(|| side(first, bodies_first, scale_first), || side(second, bodies_second, scale_second));
 }
 
 /// Two unit vectors completing `n` to a right-handed orthonormal basis.

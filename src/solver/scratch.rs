@@ -245,6 +245,8 @@ pub struct SolveScratch {
     /// The free bodies of the constraints, each once, in solver-body order (the static slots
     /// between the sides and at the end skipped).
     pub moving: Vec<u32>,
+    /// The fixed bodies of the constraints, each once (all in the last static slot).
+    pub fixed: Vec<u32>,
     /// Free bodies on the first side; solver body `left` is that side's static slot.
     pub left: usize,
     /// The second side holds constraints: the scene is cut in two (`constraints::gather_bodies`).
