@@ -71,11 +71,39 @@ fn a_pyramid_solved_in_two_sides_is_bit_identical_on_one_thread_or_two() {
     assert_eq!(run(1), run(2));
 }
 
+/// A wall of bricks: four staggered rows of unit cubes, 60 long, each brick on two below
+/// (as in a pyramid, whose rows chain brick to brick), far wider than tall.
+const PILE: &str = r#"Scene(
+    dt: 0.0166666667,
+    actors: [
+        Actor(name: "ground", shape: Box(size: (80.0, 1.0, 10.0)), position: (0.0, -0.5, 0.0), fixed: true),
+    ],
+    spawners: [
+        Grid(actor: Actor(name: "row0", shape: Box(size: (1.0, 1.0, 1.0)), position: (-30.0, 0.5, 0.0)),
+             counts: (60, 1, 1), spacing: (1.0, 1.0, 1.0)),
+        Grid(actor: Actor(name: "row1", shape: Box(size: (1.0, 1.0, 1.0)), position: (-29.5, 1.5, 0.0)),
+             counts: (59, 1, 1), spacing: (1.0, 1.0, 1.0)),
+        Grid(actor: Actor(name: "row2", shape: Box(size: (1.0, 1.0, 1.0)), position: (-29.0, 2.5, 0.0)),
+             counts: (58, 1, 1), spacing: (1.0, 1.0, 1.0)),
+        Grid(actor: Actor(name: "row3", shape: Box(size: (1.0, 1.0, 1.0)), position: (-28.5, 3.5, 0.0)),
+             counts: (57, 1, 1), spacing: (1.0, 1.0, 1.0)),
+    ],
+)"#;
+
+/// `PILE` after `steps` steps in a pool of `threads`, handed to `look`.
+fn pile_on<T: Send>(threads: usize, steps: u64, look: impl FnOnce(&rigid_sandbox::sim::Sim) -> T + Send) -> T {
+    on_threads(threads, || {
+        let mut sim = sim_from_text(PILE);
+        sim.run(steps).expect("finite");
+        look(&sim)
+    })
+}
+
 #[test]
 fn one_thread_places_both_sides_in_shared_batches() {
     // On one thread the two sides' constraints are placed as one group: the same constraints
     // in fewer batches (a side's rows chain body to body and leave lanes empty), with the same
-    // bits as two threads (the test above).
+    // bits as two threads.
     use rigid_sandbox::solver::{ConstraintGroup, SolveScratch};
     let batches = |threads: usize| {
         pyramid_on(threads, 10, |sim| {
@@ -83,15 +111,38 @@ fn one_thread_places_both_sides_in_shared_batches() {
             let [first, second, across] = &s.groups;
             let lanes = |g: &ConstraintGroup| g.fill.iter().map(|&f| usize::from(f)).sum::<usize>();
             assert_eq!(lanes(first) + lanes(second) + lanes(across), s.held.len(), "every held pair placed once");
-            (s.merged, second.batches.is_empty(), first.batches.len() + second.batches.len())
+            let batches = first.batches.len() + second.batches.len();
+            (s.merged, second.batches.is_empty(), batches, rigid_sandbox::io::output::state_hash(&sim.actors()))
         })
     };
-    let (merged, second_empty, one) = batches(1);
+    let (merged, second_empty, one, bits) = batches(1);
     assert!(merged && second_empty, "one thread: one group for both sides");
-    let (merged, second_empty, two) = batches(2);
+    let (merged, second_empty, two, bits_two) = batches(2);
     assert!(!merged && !second_empty, "two threads: a group a side");
-    // B = 20: 146 batches against 95 + 93.
-    assert!(one * 10 < two * 8, "shared batches fill up: {one} against {two}");
+    assert_eq!(bits, bits_two, "the same bits");
+    // B = 20, cut across its height: 153 batches against 158 (cut upright, alike sides: 146
+    // against 95 + 93).
+    assert!(one < two, "shared batches fill up: {one} against {two}");
+}
+
+#[test]
+fn a_pile_is_cut_where_fewer_held_pairs_cross() {
+    // A pyramid is as tall as it is wide, and fewer of its contacts cross a level cut at half
+    // its bodies than an upright one: its lower half is one side. The wall is cut upright,
+    // across x, its long axis.
+    use rigid_sandbox::solver::SolveScratch;
+    let sides = |sim: &rigid_sandbox::sim::Sim, axis: usize| {
+        let s = sim.ctx.scratch.get::<SolveScratch>().expect("solve ran");
+        assert!(sim.ctx.stats.split, "cut in two sides");
+        let along = |i: &u32| sim.ctx.bodies.position[*i as usize].to_array()[axis];
+        let (first, second) = s.moving.split_at(s.left);
+        let highest = first.iter().map(along).fold(f64::NEG_INFINITY, f64::max);
+        (highest, second.iter().map(along).fold(f64::INFINITY, f64::min))
+    };
+    let (below, above) = pyramid_on(1, 10, |sim| sides(sim, 1));
+    assert!(below <= above, "the pyramid cut across its height: {below} against {above}");
+    let (left, right) = pile_on(1, 10, |sim| sides(sim, 0));
+    assert!(left <= right, "the wall cut across x: {left} against {right}");
 }
 
 #[test]

@@ -66,8 +66,8 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     let SolveScratch { order, by_pair, cached, cache, ranked, unranked, .. } = s;
     let last = Ranks { by_pair, cached, entries: cache.len() };
     let held = order.len();
-    let SolveScratch { ends, jointed, slot, moving, fixed, keys, left, scale, bodies, .. } = s;
-    let parts = BodyParts { ends, held, jointed, slot, moving, fixed, keys, left, scale, bodies };
+    let SolveScratch { ends, jointed, slot, moving, fixed, keys, upright, left, scale, bodies, .. } = s;
+    let parts = BodyParts { ends, held, jointed, slot, moving, fixed, keys, upright, left, scale, bodies };
     rayon::join(|| sort_from_last_order(order, &last, ranked, unranked), || gather_bodies(b, parts));
     // Each constraint's group: within the first side, within the second, or across; then its
     // batches, each group placed on its own. One thread solves the sides one after the other:
@@ -352,6 +352,7 @@ struct BodyParts<'a> {
     moving: &'a mut Vec<u32>,
     fixed: &'a mut Vec<u32>,
     keys: &'a mut Vec<(u64, u32)>,
+    upright: &'a mut Vec<(u64, u32)>,
     left: &'a mut usize,
     scale: &'a mut Vec<Mat3>,
     bodies: &'a mut Vec<SolverBody>,
@@ -364,12 +365,13 @@ const SPLIT_MIN: usize = 256;
 /// S = (I⁻¹)^½ in world axes, S = R diag(1/√I_p) Rᵀ with R the principal frame in world axes.
 ///
 /// The free bodies are split in two sides at their median along the horizontal axis of
-/// widest spread (a scene with fewer than `SPLIT_MIN` constraints stays on one side); solver
+/// widest spread, or along the vertical for a tall pile where that cut crosses clearly fewer
+/// held pairs (a scene with fewer than `SPLIT_MIN` constraints stays on one side); solver
 /// bodies are the first side's, its static slot, the second side's, and the last static slot.
 /// Every fixed body maps to a static slot. The split depends on the scene only, never on the
 /// thread count, so runs are the same on one thread or two.
 fn gather_bodies(b: &Bodies, parts: BodyParts) {
-    let BodyParts { ends, held, jointed, slot, moving, fixed, keys, left, scale, bodies } = parts;
+    let BodyParts { ends, held, jointed, slot, moving, fixed, keys, upright, left, scale, bodies } = parts;
     // Last step's bodies let go, so that every slot is unmarked.
     for &i in moving.iter().chain(fixed.iter()) {
         slot[i as usize] = u32::MAX;
@@ -393,19 +395,47 @@ fn gather_bodies(b: &Bodies, parts: BodyParts) {
     }
     *left = moving.len();
     if held >= SPLIT_MIN {
-        // The horizontal axis (across gravity) along which the bodies spread widest.
-        let spread = |axis: Vector| {
-            let along = moving.iter().map(|&i| b.position[i as usize].dot(axis));
-            let (lo, hi) = along.fold((Scalar::INFINITY, Scalar::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
-            hi - lo
-        };
-        let axis = if spread(Vector::X) >= spread(Vector::Z) { Vector::X } else { Vector::Z };
-        keys.clear();
-        keys.extend(moving.iter().map(|&i| (total_order_key(b.position[i as usize].dot(axis)), i)));
-        // Only which side each body is on matters (a side's numbering changes no result), so
-        // a partition at the median will do, with no sort.
         *left = moving.len() / 2;
-        keys.select_nth_unstable(*left);
+        let half = *left;
+        // The bodies' extent along each world axis.
+        let (lo, hi) = moving
+            .iter()
+            .map(|&i| b.position[i as usize])
+            .fold((Vector::splat(Scalar::INFINITY), Vector::splat(Scalar::NEG_INFINITY)), |(lo, hi), x| {
+                (lo.min(x), hi.max(x))
+            });
+        let spread = hi - lo;
+        // Cut across the horizontal axis of widest spread; or, for a pile at least half as tall
+        // as wide (a pyramid, a tower), across the vertical if that saves a fifth of the held
+        // pairs that cross: fewer constraints across, solved after the sides, but sides unlike
+        // in shape, whose batches one thread fills less well when it shares them.
+        let level = if spread.x >= spread.z { Vector::X } else { Vector::Z };
+        // The median partition along `axis` into `keys` (only which side each body is on
+        // matters, a side's numbering changes no result, so no sort).
+        let cut_along = |axis: Vector, keys: &mut Vec<(u64, u32)>| {
+            keys.clear();
+            keys.extend(moving.iter().map(|&i| (total_order_key(b.position[i as usize].dot(axis)), i)));
+            keys.select_nth_unstable(half);
+        };
+        // How many held pairs of two free bodies a partition puts on different sides (marked
+        // 0 and 1 in `slot`; fixed bodies stay marked otherwise).
+        let crossing = |keys: &[(u64, u32)], slot: &mut [u32]| {
+            for (k, &(_, i)) in keys.iter().enumerate() {
+                slot[i as usize] = u32::from(k >= half);
+            }
+            let crosses = |e: &&PairEnds| {
+                let (sa, sb) = (slot[e.a as usize], slot[e.b as usize]);
+                sa <= 1 && sb <= 1 && sa != sb
+            };
+            ends.iter().filter(|e| e.len > 0).filter(crosses).count()
+        };
+        cut_along(level, keys);
+        if 2.0 * spread.y >= spread.x.max(spread.z) {
+            cut_along(Vector::Y, upright);
+            if 5 * crossing(upright, slot) < 4 * crossing(keys, slot) {
+                std::mem::swap(keys, upright);
+            }
+        }
         moving.clear();
         moving.extend(keys.iter().map(|k| k.1));
     }

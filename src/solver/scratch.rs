@@ -256,6 +256,8 @@ pub struct SolveScratch {
     pub merged: bool,
     /// Scratch: each free body's coordinate along the split, with its actor index.
     pub keys: Vec<(u64, u32)>,
+    /// Scratch: the same along the vertical, while the two cuts are compared.
+    pub upright: Vec<(u64, u32)>,
     /// Scratch of the solving order's sort: the held pairs by their place in last step's order.
     pub ranked: Vec<(u64, u32)>,
     /// Scratch of the solving order's sort: the held pairs that were not held last step.
