@@ -73,7 +73,7 @@ fn a_pyramid_solved_in_two_sides_is_bit_identical_on_one_thread_or_two() {
 
 /// A wall of bricks: four staggered rows of unit cubes, 60 long, each brick on two below
 /// (as in a pyramid, whose rows chain brick to brick), far wider than tall.
-const PILE: &str = r#"Scene(
+const WALL: &str = r#"Scene(
     dt: 0.0166666667,
     actors: [
         Actor(name: "ground", shape: Box(size: (80.0, 1.0, 10.0)), position: (0.0, -0.5, 0.0), fixed: true),
@@ -90,10 +90,10 @@ const PILE: &str = r#"Scene(
     ],
 )"#;
 
-/// `PILE` after `steps` steps in a pool of `threads`, handed to `look`.
-fn pile_on<T: Send>(threads: usize, steps: u64, look: impl FnOnce(&rigid_sandbox::sim::Sim) -> T + Send) -> T {
+/// `WALL` after `steps` steps in a pool of `threads`, handed to `look`.
+fn wall_on<T: Send>(threads: usize, steps: u64, look: impl FnOnce(&rigid_sandbox::sim::Sim) -> T + Send) -> T {
     on_threads(threads, || {
-        let mut sim = sim_from_text(PILE);
+        let mut sim = sim_from_text(WALL);
         sim.run(steps).expect("finite");
         look(&sim)
     })
@@ -141,7 +141,7 @@ fn a_pile_is_cut_where_fewer_held_pairs_cross() {
     };
     let (below, above) = pyramid_on(1, 10, |sim| sides(sim, 1));
     assert!(below <= above, "the pyramid cut across its height: {below} against {above}");
-    let (left, right) = pile_on(1, 10, |sim| sides(sim, 0));
+    let (left, right) = wall_on(1, 10, |sim| sides(sim, 0));
     assert!(left <= right, "the wall cut across x: {left} against {right}");
 }
 
