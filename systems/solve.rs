@@ -168,6 +168,7 @@ fn find_manifolds(ctx: &mut StepContext) {
             }
             *ends = PairEnds::of(pair, m, up);
             *warm = warm_start_of(Some(old), m.len, None, b.radius[ia]);
+            ends.quiet = warm.is_zero(m.len);
         }
     });
     // Only the pairs found afresh need their bodies posed.
@@ -214,6 +215,7 @@ fn find_manifolds(ctx: &mut StepContext) {
         *anchors = ContactAnchors { axis: Some(axis.reference), ..fixed_to_bodies(m, axis.normal, b, ia, ib) };
         *ends = PairEnds::of(pair, m, up);
         *warm = warm_start_of(last, m.len, Some(anchors), b.radius[ia]);
+        ends.quiet = warm.is_zero(m.len);
     });
 }
 

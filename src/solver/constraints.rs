@@ -87,23 +87,48 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     for group in &mut s.groups {
         group.slots.clear();
     }
+    // Each group solves its quiet constraints (no impulse carried over: contacts at the side
+    // of a stack, speculative ones) after the others, so that they fill batches of their own,
+    // which a sweep leaves alone while they stay quiet (`Batch::quiet`). A body's constraints
+    // keep their order among the loud and among the quiet.
     s.held.clear();
-    for &(_, k) in &s.order {
-        let ends = s.ends[k as usize];
-        let slot = [s.slot[ends.a as usize], s.slot[ends.b as usize]];
+    s.quiet.clear();
+    let frames = s.groups.each_ref().map(|g| (g.offset, g.static_slot));
+    let (slot, merged) = (&s.slot, s.merged);
+    let group_of = |ends: PairEnds| {
+        let slot = [slot[ends.a as usize], slot[ends.b as usize]];
         let side = |i: u32| if i == left || i == last { None } else { Some(i > left) };
         let group = match (side(slot[0]), side(slot[1])) {
             (Some(true), Some(true) | None) | (None, Some(true)) => 1,
             (Some(false), Some(false) | None) | (None, Some(false)) | (None, None) => 0,
             _ => 2,
         };
+        let kept = if merged && group == 1 { 0 } else { group };
+        let (offset, static_slot) = frames[kept];
+        let local = |i: u32| if i == left || i == last { static_slot } else { i - offset };
+        (group, kept, [local(slot[0]), local(slot[1])])
+    };
+    for &(_, k) in &s.order {
+        let ends = s.ends[k as usize];
+        let (group, kept, slots) = group_of(ends);
         s.split |= group == 1;
-        let group = if s.merged && group == 1 { 0 } else { group };
-        let g = &mut s.groups[group];
-        let local = |i: u32| if i == left || i == last { g.static_slot } else { i - g.offset };
-        let slot = [local(slot[0]), local(slot[1])];
-        s.held.push(HeldPair { pair: k, group: group as u8, at: g.slots.len() as u32, len: ends.len as u8 });
-        g.slots.push(slot);
+        let (len, quiet) = (ends.len as u8, ends.quiet);
+        let g = &mut s.groups[kept];
+        let at = if quiet {
+            s.quiet.push(s.held.len() as u32);
+            0
+        } else {
+            g.slots.push(slots);
+            g.slots.len() as u32 - 1
+        };
+        s.held.push(HeldPair { pair: k, group: kept as u8, at, len, quiet });
+    }
+    for &h in &s.quiet {
+        let held = &mut s.held[h as usize];
+        let (_, kept, slots) = group_of(s.ends[held.pair as usize]);
+        let g = &mut s.groups[kept];
+        held.at = g.slots.len() as u32;
+        g.slots.push(slots);
     }
     // The two sides' groups placed and filled at once (they write disjoint batches), the third
     // by whichever thread is free first.
@@ -203,12 +228,19 @@ fn sort_from_last_order(
 /// The group of the constraints across the two sides (`SolveScratch::groups`).
 const ACROSS: u8 = 2;
 
+/// The bit of a constraint's kind (its point count, `place`) that marks it quiet.
+const QUIET: u8 = 0x80;
+
 /// Places group `which`'s constraints in batches (`solver::place`, manifolds of one point count
-/// together), each batch as long as its longest manifold, and makes room for their points.
-/// `fill` writes every lane and point of them, idle ones included, so nothing is cleared here.
+/// together, and quiet ones apart: `Batch::quiet`), each batch as long as its longest
+/// manifold, and makes room for their points. `fill` writes every lane and point of them, idle
+/// ones included, so nothing is cleared here.
 pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGroup) {
     group.kinds.clear();
-    group.kinds.extend(held.iter().filter(|h| h.group == which).map(|h| h.len));
+    group.kinds.resize(group.slots.len(), 0);
+    for h in held.iter().filter(|h| h.group == which) {
+        group.kinds[h.at as usize] = h.len | if h.quiet { QUIET } else { 0 };
+    }
     if which == ACROSS {
         // One chain up the cut: packed, not one constraint a batch (`place_packed`).
         super::place_packed(&group.slots, group.static_slot, &mut group.fill, &mut group.placed);
@@ -219,11 +251,13 @@ pub(super) fn place_group(held: &[HeldPair], which: u8, group: &mut ConstraintGr
     let ConstraintGroup { batches, points, fill, placed, kinds, .. } = group;
     batches.resize(fill.len(), Batch::default());
     for batch in batches.iter_mut() {
-        batch.len = 0;
+        (batch.len, batch.quiet) = (0, true);
     }
-    for (&len, &(batch, _)) in kinds.iter().zip(placed.iter()) {
+    for (&kind, &(batch, _)) in kinds.iter().zip(placed.iter()) {
         let batch = &mut batches[batch as usize];
-        batch.len = batch.len.max(u32::from(len));
+        batch.len = batch.len.max(u32::from(kind & !QUIET));
+        // The constraints across are packed whatever their kinds.
+        batch.quiet &= kind & QUIET != 0;
     }
     let mut first = 0;
     for batch in batches.iter_mut() {
@@ -250,7 +284,8 @@ pub(super) fn make_idle(held: &[HeldPair], which: u8, group: &mut ConstraintGrou
             }
         }
     }
-    for (held, &(batch, lane)) in held.iter().filter(|h| h.group == which).zip(placed.iter()) {
+    for held in held.iter().filter(|h| h.group == which) {
+        let (batch, lane) = placed[held.at as usize];
         let batch = &batches[batch as usize];
         for row in &mut points[(batch.first + u32::from(held.len)) as usize..(batch.first + batch.len) as usize] {
             row.set(usize::from(lane), &ContactPoint::IDLE);
@@ -282,9 +317,9 @@ fn fill(sh: &Shared, which: u8, group: &mut ConstraintGroup) {
     // Each batch's lanes: (pair, index in the group).
     lanes.clear();
     lanes.resize(batches.len(), [(0, 0); LANES]);
-    let mine = sh.held.iter().filter(|h| h.group == which);
-    for (c, (held, &(batch, lane))) in mine.zip(placed.iter()).enumerate() {
-        lanes[batch as usize][usize::from(lane)] = (held.pair, c as u32);
+    for held in sh.held.iter().filter(|h| h.group == which) {
+        let (batch, lane) = placed[held.at as usize];
+        lanes[batch as usize][usize::from(lane)] = (held.pair, held.at);
     }
     // Restitution reverses the approach before gravity's pull this step (Box2D v3 measures it
     // before integrating forces).

@@ -215,6 +215,9 @@ fn points_of<'a>(batch: &Batch, points: &'a mut [PointRows]) -> &'a mut [PointRo
 /// body (`drive::Step::Repeat`).
 pub fn warm_start<B: BodyStore + ?Sized>(bodies: &mut B, batches: &[Batch], points: &mut [PointRows]) {
     for batch in batches {
+        if batch.quiet && no_impulse(batch, points_of(batch, points)) {
+            continue; // it would push nothing
+        }
         let mut lane_bodies = LaneBodies::open(bodies, batch);
         let inv_mass_sum = load(&batch.inv_mass_sum);
         for p in points_of(batch, points).iter() {
@@ -259,6 +262,9 @@ pub fn sweep<B: BodyStore + ?Sized>(
         };
         let motion = motion.as_ref();
         let batch_points = points_of(batch, points);
+        if batch.quiet && stays_quiet(&lane_bodies, motion, batch, batch_points, (h, soft)) {
+            continue;
+        }
         // Points go in pairs (0, 1), (2, 3): a manifold's diagonals (`manifold::reduce`).
         if soft.is_none() {
             // Friction before the normal rows as well as after: friction at the contact plane
@@ -279,6 +285,40 @@ pub fn sweep<B: BodyStore + ?Sized>(
         }
         lane_bodies.close(bodies, batch);
     }
+}
+
+/// True when no lane of `batch` holds an impulse, normal or friction.
+#[inline(always)]
+fn no_impulse(batch: &Batch, batch_points: &[PointRows]) -> bool {
+    let zero = |lanes: &Lanes| load(lanes).simd_eq(Reg::ZERO);
+    let f = &batch.friction.impulse;
+    let none = zero(&f[0]) & zero(&f[1]) & zero(&f[2]);
+    batch_points.iter().fold(none, |none, p| none & zero(&p.impulse)).all()
+}
+
+/// True when a sweep would leave a quiet batch (`Batch::quiet`) as it is: no lane holds an
+/// impulse and every normal row is satisfied, u + b ≥ 0. `block` then finds each pair of rows
+/// apart, a single row's step is not positive, and friction, bounded by the normal impulses
+/// (before the normal rows as after), stays at zero, so nothing pushes the bodies. The gaps
+/// are worked out (and kept) as the sweep would.
+#[inline(always)]
+fn stays_quiet(
+    lane_bodies: &LaneBodies,
+    motion: Option<&Motion>,
+    batch: &Batch,
+    batch_points: &mut [PointRows],
+    (h, soft): (Scalar, Option<Softness>),
+) -> bool {
+    if !no_impulse(batch, batch_points) {
+        return false;
+    }
+    let mut satisfied = true;
+    for p in batch_points.iter_mut() {
+        let gap = gap_now(p, motion);
+        let bias = NormalRows::new(p, gap, batch, h, soft).bias;
+        satisfied &= (lane_bodies.normal_speed(&p.g) + bias).simd_ge(Reg::ZERO).all();
+    }
+    satisfied
 }
 
 /// The gaps of point `p` now: worked out from `motion` and kept, or as last kept.

@@ -63,6 +63,9 @@ pub struct Batch {
     pub first: u32,
     /// Most points of any lane.
     pub len: u32,
+    /// Every lane started the step with no impulse (`PairEnds::quiet`): while its impulses
+    /// stay zero and no normal row asks for a push, a pass leaves it as it is (`kernel`).
+    pub quiet: bool,
     /// The two tangents.
     pub tangents: [LaneVectors; 2],
     /// Friction coefficients.

@@ -66,6 +66,8 @@ pub struct HeldPair {
     pub at: u32,
     /// Points (1 to 4).
     pub len: u8,
+    /// It carries no impulse from last step (`PairEnds::quiet`).
+    pub quiet: bool,
 }
 
 /// A pair's contact points fixed to the two bodies, so a pair that has hardly moved relative to
@@ -123,6 +125,14 @@ pub struct WarmStart {
     pub twist: Vector,
 }
 
+impl WarmStart {
+    /// True when it starts the first `len` points and the friction patch at no impulse.
+    #[must_use]
+    pub fn is_zero(&self, len: usize) -> bool {
+        self.normal[..len].iter().all(|&j| j == 0.0) && self.tangent == Vector::ZERO && self.twist == Vector::ZERO
+    }
+}
+
 /// Whether a pair with an entry in the warm-start cache keeps its points this step, worked out
 /// once: by `prune`, which takes such pairs out of the detection tests, and read by `solve`
 /// instead of being worked out again, if no body moved in between.
@@ -176,6 +186,9 @@ pub struct PairEnds {
     /// The height of its points' centre along `up` as a sort key (`total_order_key`; lowest
     /// first), if held.
     pub key: u64,
+    /// It starts the step with no impulse, normal or friction (a contact at the side of a
+    /// stack, or one held speculatively): placed with others like it (`Batch::quiet`).
+    pub quiet: bool,
 }
 
 impl PairEnds {
@@ -187,7 +200,7 @@ impl PairEnds {
         let held = m.len > 0 && pair.contact().is_some();
         let height = || m.points().iter().map(|p| p.dot(up)).sum::<Scalar>() / m.len as Scalar;
         let (len, key) = if held { (m.len as u32, total_order_key(height())) } else { (0, 0) };
-        Self { a: pair.a, b: pair.b, len, key }
+        Self { a: pair.a, b: pair.b, len, key, quiet: false }
     }
 }
 
@@ -205,8 +218,11 @@ pub struct SolveScratch {
     /// The order in which pairs are solved: (height of the contact against gravity as a
     /// `math::total_order_key`, index).
     pub order: Vec<(u64, u32)>,
-    /// One entry per held pair, in solving order.
+    /// One entry per held pair, in `order`.
     pub held: Vec<HeldPair>,
+    /// The quiet ones among them (`PairEnds::quiet`), by index into `held`: each group takes
+    /// them after its other constraints.
+    pub quiet: Vec<u32>,
     /// The constraints in three groups: those among the bodies of one side of the scene, of
     /// the other, and across (see `solver::build_constraints`). The first two are solved at
     /// once on two threads, the third after them.
