@@ -153,7 +153,7 @@ pub(super) fn second_side_first(first: &ConstraintGroup, second: &ConstraintGrou
     second.slots.len() > first.slots.len()
 }
 
-/// Last step's solving order, as `sort_from_last_order` reads it.
+/// Last step's order of the held pairs (lowest first), as `sort_from_last_order` reads it.
 struct Ranks<'a> {
     /// Each cache entry's place in last step's order (`SolveScratch::by_pair`).
     by_pair: &'a [u32],
@@ -163,8 +163,8 @@ struct Ranks<'a> {
     entries: usize,
 }
 
-/// Sorts `order` starting from last step's solving order: the pairs held then in the order
-/// they were solved (`by_pair`, each cache entry's place in it, left by `solve::remember`)
+/// Sorts `order` starting from last step's: the pairs held then in that order (`by_pair`,
+/// each cache entry's place in it, left by `solve::remember`)
 /// finished by an insertion sort (past a budget of moves, sorted afresh), the others sorted on
 /// their own and merged in. A resting pile keeps most of its order, so this does less work than
 /// sorting afresh; the keys are distinct (pair indices break ties), so the result is the same.

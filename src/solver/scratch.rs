@@ -215,7 +215,8 @@ pub struct SolveScratch {
     pub manifolds: Vec<Manifold>,
     /// Whether each pair is near but untouched (no test found it).
     pub near: Vec<bool>,
-    /// The order in which pairs are solved: (height of the contact against gravity as a
+    /// The held pairs lowest first, the order in which each group solves them (its quiet ones
+    /// after the others): (height of the contact against gravity as a
     /// `math::total_order_key`, index).
     pub order: Vec<(u64, u32)>,
     /// One entry per held pair, in `order`.
@@ -238,8 +239,8 @@ pub struct SolveScratch {
     pub warm: Vec<WarmStart>,
     /// Each pair's index in `cache` (`u32::MAX` for none).
     pub cached: Vec<u32>,
-    /// The held pairs' indices into `held` (their places in the solving order), in pair order,
-    /// so by cache entry: `solve::remember` fills it, and the next step's order starts from it.
+    /// The held pairs' indices into `held` (their places in `order`), in pair order, so by
+    /// cache entry: `solve::remember` fills it, and the next step's order starts from it.
     pub by_pair: Vec<u32>,
     /// Last step's anchors and impulses by pair, in pair order (found through `cached`).
     /// Whatever writes it writes `cache_keys` too (`set_cache`).
