@@ -383,6 +383,9 @@ proptest! {
     }
 }
 
+/// The restitution threshold of `planned` [m/s].
+const RESTITUTION_THRESHOLD: Scalar = 0.5;
+
 /// The kernel's results after `PLAN` on `pairs` laid out with the quiet marks `quiet`: every
 /// body's velocities, then each pair's friction impulses and its points' accumulated and
 /// largest impulses, in pair order.
@@ -401,7 +404,14 @@ fn planned(bodies: &[SolverBody], pairs: &[PairRows], h: Scalar, quiet: &[bool])
                 let free = kb.len() - 1;
                 kb[..free].iter_mut().for_each(|b| (b.dx, b.dq) = (b.dx + b.v * h, b.dq + b.w * h));
             }
-            Step::Restitution => {}
+            Step::Restitution => {
+                let may = |&k: &u32| {
+                    let batch = &group.batches[k as usize];
+                    kernel::may_bounce(batch, &group.points[batch.rows()], RESTITUTION_THRESHOLD)
+                };
+                let bouncing: Vec<u32> = (0..group.batches.len() as u32).filter(may).collect();
+                kernel::restitution(&mut kb[..], (&group.batches, &bouncing), &mut group.points, RESTITUTION_THRESHOLD);
+            }
         }
     }
     let mut out: Vec<Scalar> = kb.iter().flat_map(|b| b.v.to_array().into_iter().chain(b.w.to_array())).collect();
