@@ -93,42 +93,35 @@ pub(crate) fn build_constraints(ctx: &mut StepContext) {
     // keep their order among the loud and among the quiet.
     s.held.clear();
     s.quiet.clear();
-    let frames = s.groups.each_ref().map(|g| (g.offset, g.static_slot));
-    let (slot, merged) = (&s.slot, s.merged);
-    let group_of = |ends: PairEnds| {
-        let slot = [slot[ends.a as usize], slot[ends.b as usize]];
+    for &(_, k) in &s.order {
+        let ends = s.ends[k as usize];
+        let slot = [s.slot[ends.a as usize], s.slot[ends.b as usize]];
         let side = |i: u32| if i == left || i == last { None } else { Some(i > left) };
         let group = match (side(slot[0]), side(slot[1])) {
             (Some(true), Some(true) | None) | (None, Some(true)) => 1,
             (Some(false), Some(false) | None) | (None, Some(false)) | (None, None) => 0,
             _ => 2,
         };
-        let kept = if merged && group == 1 { 0 } else { group };
-        let (offset, static_slot) = frames[kept];
-        let local = |i: u32| if i == left || i == last { static_slot } else { i - offset };
-        (group, kept, [local(slot[0]), local(slot[1])])
-    };
-    for &(_, k) in &s.order {
-        let ends = s.ends[k as usize];
-        let (group, kept, slots) = group_of(ends);
         s.split |= group == 1;
+        let group = if s.merged && group == 1 { 0 } else { group };
+        let g = &mut s.groups[group];
+        let local = |i: u32| if i == left || i == last { g.static_slot } else { i - g.offset };
+        let slot = [local(slot[0]), local(slot[1])];
         let (len, quiet) = (ends.len as u8, ends.quiet);
-        let g = &mut s.groups[kept];
         let at = if quiet {
-            s.quiet.push(s.held.len() as u32);
-            0
+            s.quiet.push((s.held.len() as u32, slot));
+            0 // given below
         } else {
-            g.slots.push(slots);
+            g.slots.push(slot);
             g.slots.len() as u32 - 1
         };
-        s.held.push(HeldPair { pair: k, group: kept as u8, at, len, quiet });
+        s.held.push(HeldPair { pair: k, group: group as u8, at, len, quiet });
     }
-    for &h in &s.quiet {
+    for &(h, slot) in &s.quiet {
         let held = &mut s.held[h as usize];
-        let (_, kept, slots) = group_of(s.ends[held.pair as usize]);
-        let g = &mut s.groups[kept];
+        let g = &mut s.groups[usize::from(held.group)];
         held.at = g.slots.len() as u32;
-        g.slots.push(slots);
+        g.slots.push(slot);
     }
     // The two sides' groups placed and filled at once (they write disjoint batches), the third
     // by whichever thread is free first.

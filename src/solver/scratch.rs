@@ -221,9 +221,9 @@ pub struct SolveScratch {
     pub order: Vec<(u64, u32)>,
     /// One entry per held pair, in `order`.
     pub held: Vec<HeldPair>,
-    /// The quiet ones among them (`PairEnds::quiet`), by index into `held`: each group takes
-    /// them after its other constraints.
-    pub quiet: Vec<u32>,
+    /// The quiet ones among them (`PairEnds::quiet`), by index into `held`, with their slots
+    /// in their group's numbering: each group takes them after its other constraints.
+    pub quiet: Vec<(u32, [u32; 2])>,
     /// The constraints in three groups: those among the bodies of one side of the scene, of
     /// the other, and across (see `solver::build_constraints`). The first two are solved at
     /// once on two threads, the third after them.
